@@ -1,0 +1,1 @@
+//! Finite elements: quadrature, hex8, faces, kernels, sparse assembly, solvers.

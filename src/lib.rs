@@ -1,0 +1,13 @@
+//! groutready: staged 3-D finite-element simulation of concrete arch dams under
+//! construction, answering per grouting zone whether a transverse joint will be
+//! open enough to grout on its planned date.
+//!
+//! The pipeline shows in the module tree:
+//! scene + schedule → mesh → fem (element → quadrature → assembly → solve)
+//! → thermal → sim (staged driver) → output. See `docs/ARCHITECTURE.md`.
+
+pub mod fem;
+pub mod material;
+pub mod mesh;
+pub mod scene;
+pub mod schedule;

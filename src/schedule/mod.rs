@@ -1,0 +1,1 @@
+//! CSV schedules: pours, cooling, grouting, weather, reservoir.
