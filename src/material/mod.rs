@@ -7,4 +7,4 @@ pub mod adiabatic;
 pub mod pipe_cooling;
 
 pub use adiabatic::AdiabaticRise;
-pub use pipe_cooling::{hydration_under_cooling, PipeLayout, ZhuPipe};
+pub use pipe_cooling::{PipeLayout, ZhuPipe};
