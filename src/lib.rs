@@ -6,8 +6,14 @@
 //! scene + schedule → mesh → fem (element → quadrature → assembly → solve)
 //! → thermal → sim (staged driver) → output. See `docs/ARCHITECTURE.md`.
 
+pub mod app;
 pub mod fem;
 pub mod material;
 pub mod mesh;
+pub mod output;
+pub mod progress;
 pub mod scene;
 pub mod schedule;
+pub mod sim;
+pub mod study;
+pub mod thermal;

@@ -1,1 +1,152 @@
-fn main() {}
+//! `groutready` command line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+
+use groutready::app;
+
+/// Will each transverse joint of an arch dam under construction be open
+/// enough to grout on its planned date?
+#[derive(Parser)]
+#[command(name = "groutready", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene with its schedules and write a run folder.
+    Run {
+        /// Scene file (default: the bundled demo arch dam, models/demo_arch.toml).
+        scene: Option<PathBuf>,
+        /// Schedules folder (default: the scene's `schedules`).
+        #[arg(long)]
+        schedules: Option<PathBuf>,
+        /// Run folder to write (default: runs/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Benchmarks: what accuracy costs in time.
+    Study {
+        #[command(subcommand)]
+        what: StudyCommand,
+    },
+    /// Schedule tools.
+    Schedule {
+        #[command(subcommand)]
+        what: ScheduleCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum StudyCommand {
+    /// Thermal run time, steps and factorisations on the demo and the large arch.
+    Perf {
+        /// Scenes to time (default: models/demo_arch.toml and models/xiaowan_like.toml).
+        scenes: Vec<PathBuf>,
+        /// Time only the first (demo) scene.
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum ScheduleCommand {
+    /// Write a plausible construction schedule (pours, cooling, grouting) for a scene.
+    Synth {
+        scene: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+/// The bundled scene: relative to the working directory, else to the crate.
+fn bundled(rel: &str) -> PathBuf {
+    let here = PathBuf::from(rel);
+    if here.exists() {
+        return here;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+fn default_out(scene: &Path) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    PathBuf::from("runs").join(stem)
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match dispatch(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Run {
+            scene,
+            schedules,
+            out,
+        } => {
+            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+            let out = out.unwrap_or_else(|| default_out(&scene));
+            let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+            eprintln!(
+                "{}: {} elements, {} thermal dofs, {} pours, effects {:?}",
+                inputs.scene.name,
+                inputs.mesh.elements.len(),
+                inputs.mesh.n_thermal_dofs,
+                inputs.schedules.pours.len(),
+                inputs.scene.effects
+            );
+            let bar = groutready::progress::bar("simulating");
+            let summary = app::run(&inputs, &out, &mut |day, end| {
+                groutready::progress::update(&bar, day, end)
+            })
+            .with_context(|| format!("running {}", scene.display()))?;
+            bar.finish_and_clear();
+            print!("{}", groutready::study::summary_line(&summary));
+            println!("wrote {}", summary.out.display());
+            Ok(())
+        }
+        Command::Study {
+            what: StudyCommand::Perf { scenes, quick },
+        } => {
+            let scenes = if scenes.is_empty() {
+                let mut v = vec![bundled("models/demo_arch.toml")];
+                if !quick {
+                    v.push(bundled("models/xiaowan_like.toml"));
+                }
+                v
+            } else {
+                scenes
+            };
+            groutready::study::perf(&scenes)
+        }
+        Command::Schedule {
+            what: ScheduleCommand::Synth { scene, out },
+        } => {
+            let n = groutready::study::synth_schedules(&scene, &out)?;
+            println!("wrote {n} rows to {}", out.display());
+            Ok(())
+        }
+    }
+}

@@ -1,1 +1,44 @@
 //! Finite elements: quadrature, hex8, faces, kernels, sparse assembly, solvers.
+//!
+//! What is solved: the element integrals of transient heat conduction
+//! (conductivity ∫λ∇N∇Nᵀ, capacity ∫ρcNNᵀ consistent or row-sum lumped,
+//! convection faces ∫βNNᵀ and ∫βN) on trilinear hex8 volumes and bilinear
+//! quad4 faces, assembled into a symmetric sparse matrix on a fixed pattern,
+//! with Dirichlet rows/columns eliminated in place, and solved by faer's
+//! sparse Cholesky with the symbolic analysis computed once per pattern.
+//!
+//! Pipeline, one file per step:
+//! [`quadrature`] → [`hex8`] / [`quad4`] (shape functions, Jacobians) →
+//! [`thermal_kernels`] (element matrices) → [`sparse`] (pattern, scatter
+//! assembly, Dirichlet) → [`ordering`] (AMD or geometric nested dissection)
+//! → [`solver`] (Cholesky, counters, residual).
+//!
+//! How it is verified (`tests/fem_elements.rs`, `tests/fem_sparse.rs`):
+//! Gauss rules against closed forms and polynomial exactness; hex8 partition
+//! of unity, Kronecker property, gradients against central differences, exact
+//! volumes of parallelepipeds, inverted elements rejected; conductivity
+//! annihilates constants, is symmetric positive semi-definite and passes the
+//! linear patch test on a distorted mesh; Σ lumped capacity = ρc·V; convection
+//! matrices sum to β·area; sparse assembly equals dense assembly; Dirichlet
+//! elimination equals the dense reduced solve; Cholesky residuals < 1e-12;
+//! one symbolic analysis serves several numeric factorisations; nested
+//! dissection and AMD give the same solution.
+
+pub mod error;
+pub mod hex8;
+pub mod ordering;
+pub mod quad4;
+pub mod quadrature;
+pub mod solver;
+pub mod sparse;
+pub mod thermal_kernels;
+
+pub use error::ElementError;
+pub use ordering::{nested_dissection, Ordering};
+pub use quadrature::{gauss_hex, gauss_legendre, gauss_quad, Rule};
+pub use solver::{relative_residual, CholeskySolver, SolveError, SolverStats};
+pub use sparse::{Pattern, PatternError, SparseSym, NO_DOF};
+pub use thermal_kernels::{
+    capacity_consistent, capacity_lumped, conductivity, element_volume_and_centroid,
+    face_convection, face_convection_lumped, volume_load,
+};

@@ -35,9 +35,13 @@ pub struct BlocksGeometry {
     /// Rock element layers.
     #[serde(default = "one")]
     pub rock_layers: u32,
-    /// Rock margin beyond the blocks on every side [m] (0 = rock only under the blocks).
+    /// Rock margin beyond the blocks on every side [m] (0 = rock only under the blocks);
+    /// needs `rock_depth_m > 0`. The margin's top is at the base elevation.
     #[serde(default)]
     pub rock_margin_m: f64,
+    /// Rock elements across each margin (used when `rock_margin_m > 0`).
+    #[serde(default = "one")]
+    pub rock_margin_elements: u32,
     /// Elevation of the block bases [m].
     #[serde(default)]
     pub base_elevation_m: f64,
@@ -71,7 +75,10 @@ pub struct ArchGeometry {
     /// (reached at 2/3 of the height; zero at base and crest for the default shape).
     #[serde(default)]
     pub overhang_m: f64,
-    /// Valley shape exponent: foundation depth below crest at abutment fraction f is H·(1 − f^k).
+    /// Valley shape exponent v: block b, centred at f_b = (2b − 1 − N)/N along the
+    /// crest (−1 left abutment, +1 right), is H·max(min_block_height_fraction,
+    /// (1 − |f_b|^v)/(1 − f_min^v)) high (f_min = smallest |f_b|, so the central
+    /// block(s) reach the base), its foundation rounded down to a zone boundary.
     #[serde(default = "two_f")]
     pub valley_exponent: f64,
     /// Lowest abutment block height as a fraction of H (the valley side blocks' height).

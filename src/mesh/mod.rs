@@ -1,3 +1,729 @@
 //! Hex8 meshes of dams: generators, joints, grouting zones, VTU output.
+//!
+//! # Conventions
+//!
+//! * Physical axes: **x** along the dam axis (left bank → right bank), **y**
+//!   downstream, **z** up (elevation, m). [`Mesh::upstream_normal_hint`] is
+//!   `[0, −1, 0]`.
+//! * Elements are VTK hexahedra (type 12) in the node order of
+//!   `docs/ARCHITECTURE.md`; the generators map the reference axes
+//!   ξ → along the axis (logical index `i`), η → across the dam from upstream
+//!   to downstream (`j`), ζ → up (`k`). Every generated element has a positive
+//!   Jacobian at its 8 corners ([`Mesh::validate`]).
+//! * Both generators build one structured logical grid `(i, j, k)` whose cells
+//!   are concrete (block, layer), rock or void; void cells are dropped, and so
+//!   are the nodes only void cells touch. Element layers are horizontal: every
+//!   node of logical level `k` has the same elevation.
+//! * Numbering: blocks, joints, lifts and zones are 1-based; nodes, elements,
+//!   layers, face pairs 0-based. Joint *j* lies between block *j* and *j + 1*.
+//! * **Layers** are the concrete element layers of the whole dam, counted from
+//!   0 at its lowest concrete layer; [`Mesh::layer_z`] holds their boundaries.
+//!   A lift is `layers_per_lift` layers (always 1 for the arch). Lifts are
+//!   numbered per block from its foundation.
+//! * **Zones** are global elevation bands of `zone_lifts` lifts: zone *k*
+//!   spans layers `[(k−1)·zone_lifts·layers_per_lift, k·zone_lifts·layers_per_lift)`.
+//!   Every block foundation lies on a zone boundary, so a joint always holds
+//!   whole zones; only the crest zone may hold fewer lifts when the dam height
+//!   is not a whole number of zones.
+//! * **Joints.** On a joint plane the nodes are duplicated: block *j* keeps
+//!   copy A, block *j + 1* gets copy B (same coordinates, one shared thermal
+//!   dof). A node that also touches a rock element is *not* duplicated: rock–
+//!   concrete and rock–rock nodes are shared, so a joint is closed along its
+//!   foundation edge (on a rock foundation) and where it meets rock.
+//!   Without rock (`rock_depth_m = 0` in the blocks generator) every joint node
+//!   is duplicated down to the base.
+//! * **Face pairs.** One [`FacePair`] per facing quad pair: `nodes_a` is
+//!   `elem_a`'s face 3 (ξ = +1, nodes `[1, 2, 6, 5]`), `nodes_b[k]` sits at the
+//!   same point as `nodes_a[k]` (it is `elem_b`'s nodes `[0, 3, 7, 4]`). On that
+//!   quad the bilinear coordinates are `s` = η (−1 upstream edge, +1
+//!   downstream edge) and `t` = ζ (−1 bottom, +1 top); `nodes_a` are at
+//!   `(s, t) = (−1,−1), (1,−1), (1,1), (−1,1)` ([`quad_shape`]).
+//! * **Zone points.** Per (joint, zone): upstream, centre, downstream, at the
+//!   zone's mid height. Upstream is on the joint's upstream edge (`s = −1` of
+//!   the first concrete cell across), downstream on its downstream edge, the
+//!   centre at mid thickness (logical middle across). A point on an element
+//!   edge is given to the pair below (for height) and upstream (across), with
+//!   `t = +1` / `s = +1`.
+//! * **Surfaces** ([`SurfaceFace`]) are the faces on the outer boundary of the
+//!   complete mesh: rock faces on the model's bottom and sides are
+//!   [`SurfaceKind::Far`]; exposed rock ground and concrete faces are
+//!   [`SurfaceKind::Ground`], or [`SurfaceKind::Wet`] when they face upstream
+//!   (concrete η = −1 faces) or lie upstream of the dam (rock upstream of the
+//!   upstream face). Concrete faces on the bottom of a rock-less model are
+//!   `Far`. Lift tops and joint faces are internal, not surfaces.
+//!
+//! See [`blocks`] and [`arch`] for the shapes.
 
+pub mod arch;
+pub mod blocks;
 pub mod geometry;
+mod grid;
+pub mod vtu;
+
+use std::collections::HashMap;
+use std::sync::OnceLock;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub use arch::generate_arch;
+pub use blocks::generate_blocks;
+pub use vtu::{write_pvd, write_vtu};
+
+/// Local faces of a hex8 (same table as `fem::hex8::FACES`): nodes counter-clockwise
+/// seen from outside.
+pub const HEX_FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1], // 0: ζ = −1 (bottom)
+    [4, 5, 6, 7], // 1: ζ = +1 (top)
+    [0, 1, 5, 4], // 2: η = −1 (upstream side)
+    [1, 2, 6, 5], // 3: ξ = +1 (right-bank side)
+    [2, 3, 7, 6], // 4: η = +1 (downstream side)
+    [3, 0, 4, 7], // 5: ξ = −1 (left-bank side)
+];
+
+/// Reference coordinates of the hex8 nodes (VTK order).
+const HEX_REF: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
+/// Errors of the generators and of [`Mesh::validate`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MeshError {
+    /// A generator parameter is out of range; Display: `"{param} {message}"`,
+    /// e.g. `n_blocks must be >= 1, got 0`.
+    #[error("{param} {message}")]
+    Param {
+        /// Parameter name as in the scene (`n_blocks`, `zone_height_m`, ...).
+        param: String,
+        message: String,
+    },
+    /// The parameters would give a mesh too large to index with `u32`.
+    #[error("mesh too large: {nodes} nodes, {elements} elements (limit {limit} each)")]
+    TooLarge {
+        nodes: u64,
+        elements: u64,
+        limit: u64,
+    },
+    /// An element is inverted or degenerate.
+    #[error("element {elem}: Jacobian determinant {det:.6e} <= 0 at corner {corner}")]
+    NonPositiveJacobian {
+        elem: usize,
+        corner: usize,
+        det: f64,
+    },
+    /// Any other inconsistency found by [`Mesh::validate`].
+    #[error("invalid mesh: {0}")]
+    Invalid(String),
+}
+
+impl MeshError {
+    pub(crate) fn param(param: &str, message: impl Into<String>) -> MeshError {
+        MeshError::Param {
+            param: param.to_string(),
+            message: message.into(),
+        }
+    }
+}
+
+/// What an element is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Part {
+    /// Concrete of `block`, poured with `lift` (both 1-based; lift 1 sits on the foundation).
+    Concrete {
+        block: u32,
+        lift: u32,
+    },
+    Rock,
+}
+
+/// Where on a zone a reading is taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PointKind {
+    Upstream,
+    Center,
+    Downstream,
+}
+
+impl PointKind {
+    /// `"upstream"`, `"center"`, `"downstream"` (as in the CSV outputs).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PointKind::Upstream => "upstream",
+            PointKind::Center => "center",
+            PointKind::Downstream => "downstream",
+        }
+    }
+}
+
+/// One block (column of lifts).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlockInfo {
+    /// 1-based, from the left bank.
+    pub block: u32,
+    pub n_lifts: u32,
+    /// Global layer index of the bottom layer of lift 1 (0 = lowest concrete layer of the dam).
+    pub base_layer: u32,
+    /// Elevation of the block's base [m].
+    pub foundation_z: f64,
+}
+
+/// One pair of facing joint quads (one composite joint element).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FacePair {
+    pub joint: u32,
+    pub zone: u32,
+    /// Global layer index.
+    pub layer: u32,
+    /// Element of block `joint`.
+    pub elem_a: u32,
+    /// Element of block `joint + 1`.
+    pub elem_b: u32,
+    /// `elem_a`'s face 3 (ξ = +1) in `HEX_FACES[3]` order, i.e. its nodes `[1, 2, 6, 5]`.
+    pub nodes_a: [u32; 4],
+    /// `nodes_b[k]` coincides with `nodes_a[k]` (duplicated node, or the same node
+    /// where the joint meets rock); these are `elem_b`'s nodes `[0, 3, 7, 4]`.
+    pub nodes_b: [u32; 4],
+}
+
+/// Where a zone's aperture/temperature is read.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ZonePoint {
+    pub joint: u32,
+    pub zone: u32,
+    pub kind: PointKind,
+    /// Index into [`Mesh::face_pairs`].
+    pub pair: u32,
+    /// Bilinear coordinates in [−1, 1]² on `nodes_a` of the pair ([`quad_shape`]).
+    pub s: f64,
+    pub t: f64,
+    pub xyz: [f64; 3],
+}
+
+/// A grouting zone of one joint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Zone {
+    pub joint: u32,
+    pub zone: u32,
+    pub z_bottom: f64,
+    pub z_top: f64,
+    /// Indices into [`Mesh::face_pairs`] (by layer, then upstream → downstream).
+    pub pairs: Vec<u32>,
+}
+
+/// Boundary condition family of an outer face.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceKind {
+    /// Model boundary in the rock (or the base of a rock-less model): adiabatic / fixed.
+    Far,
+    /// Ground or concrete surface in air.
+    Ground,
+    /// Surface that can be under the reservoir (upstream).
+    Wet,
+}
+
+/// A face on the outer boundary of the complete mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct SurfaceFace {
+    pub elem: u32,
+    /// Local face 0..6 (`HEX_FACES`).
+    pub face: u8,
+    pub kind: SurfaceKind,
+}
+
+/// A hex8 dam mesh with its joints and grouting zones. See the module docs for conventions.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Mesh {
+    pub nodes: Vec<[f64; 3]>,
+    pub elements: Vec<[u32; 8]>,
+    pub parts: Vec<Part>,
+    /// Node → thermal dof; the two copies of a joint node share one.
+    pub thermal_dof: Vec<u32>,
+    pub n_thermal_dofs: usize,
+    /// Elevations of the concrete layer boundaries, len = n_layers + 1.
+    pub layer_z: Vec<f64>,
+    /// Nominal lift height [m] (the arch's crest lift absorbs the remainder of the height).
+    pub lift_height: f64,
+    /// Lifts per grouting zone.
+    pub zone_lifts: u32,
+    /// Element layers per lift (1 unless the blocks generator asks for more).
+    #[serde(default = "one_u32")]
+    pub layers_per_lift: u32,
+    /// Blocks in order 1..=n.
+    pub blocks: Vec<BlockInfo>,
+    /// Sorted by (joint, layer, across position).
+    pub face_pairs: Vec<FacePair>,
+    /// Sorted by (joint, zone).
+    pub zones: Vec<Zone>,
+    /// Sorted by (joint, zone, kind): three per zone.
+    pub zone_points: Vec<ZonePoint>,
+    /// Faces on the outer boundary of the complete mesh.
+    pub surfaces: Vec<SurfaceFace>,
+    /// Elevation of the crest [m].
+    pub crest_z: f64,
+    /// Unit vector pointing upstream, `[0, −1, 0]`.
+    pub upstream_normal_hint: [f64; 3],
+    /// Per-block/per-lift element lists, built on first use.
+    #[serde(skip)]
+    index: OnceLock<LiftIndex>,
+}
+
+fn one_u32() -> u32 {
+    1
+}
+
+/// Elements of each block sorted by (lift, element), with lift offsets.
+#[derive(Debug, Clone, Default)]
+struct LiftIndex {
+    /// Per block (index block − 1): elements and `offsets[l−1]..offsets[l]` for lift l.
+    blocks: Vec<(Vec<u32>, Vec<usize>)>,
+}
+
+/// Bilinear quad shape functions at (s, t) for nodes at
+/// (−1,−1), (1,−1), (1,1), (−1,1) (the order of `FacePair::nodes_a`).
+pub fn quad_shape(s: f64, t: f64) -> [f64; 4] {
+    [
+        0.25 * (1.0 - s) * (1.0 - t),
+        0.25 * (1.0 + s) * (1.0 - t),
+        0.25 * (1.0 + s) * (1.0 + t),
+        0.25 * (1.0 - s) * (1.0 + t),
+    ]
+}
+
+/// Determinant of the hex8 Jacobian at reference point (ξ, η, ζ).
+pub fn hex_jacobian_det(x: &[[f64; 3]; 8], xi: f64, eta: f64, zeta: f64) -> f64 {
+    let mut j = [[0.0f64; 3]; 3]; // j[r][c] = ∂x_r/∂ξ_c
+    for (a, r) in HEX_REF.iter().enumerate() {
+        let d = [
+            0.125 * r[0] * (1.0 + r[1] * eta) * (1.0 + r[2] * zeta),
+            0.125 * r[1] * (1.0 + r[0] * xi) * (1.0 + r[2] * zeta),
+            0.125 * r[2] * (1.0 + r[0] * xi) * (1.0 + r[1] * eta),
+        ];
+        for row in 0..3 {
+            for col in 0..3 {
+                j[row][col] += x[a][row] * d[col];
+            }
+        }
+    }
+    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
+/// Exact volume of a hex8 with planar-or-not faces (8-point Gauss, exact for trilinear maps).
+pub fn hex_volume(x: &[[f64; 3]; 8]) -> f64 {
+    let g = 1.0 / 3f64.sqrt();
+    let mut v = 0.0;
+    for a in [-g, g] {
+        for b in [-g, g] {
+            for c in [-g, g] {
+                v += hex_jacobian_det(x, a, b, c);
+            }
+        }
+    }
+    v
+}
+
+impl Mesh {
+    /// Coordinates of the 8 nodes of element `e`.
+    pub fn element_coords(&self, e: usize) -> [[f64; 3]; 8] {
+        let c = &self.elements[e];
+        std::array::from_fn(|k| self.nodes[c[k] as usize])
+    }
+
+    /// Number of concrete element layers of the dam.
+    pub fn n_layers(&self) -> u32 {
+        self.layer_z.len().saturating_sub(1) as u32
+    }
+
+    /// Number of joints (blocks − 1).
+    pub fn joint_count(&self) -> u32 {
+        self.blocks.len().saturating_sub(1) as u32
+    }
+
+    /// Global zone (1-based) holding global layer `layer` (0-based).
+    pub fn zone_of_layer(&self, layer: u32) -> u32 {
+        layer
+            / (self
+                .zone_lifts
+                .max(1)
+                .saturating_mul(self.layers_per_lift.max(1)))
+            + 1
+    }
+
+    /// Number of global zone bands from the lowest concrete layer to the crest.
+    pub fn n_zones(&self) -> u32 {
+        let per = self
+            .zone_lifts
+            .max(1)
+            .saturating_mul(self.layers_per_lift.max(1));
+        self.n_layers().div_ceil(per)
+    }
+
+    /// Global layers `[first, end)` of zone `zone` (1-based), clipped at the crest.
+    pub fn zone_layers(&self, zone: u32) -> std::ops::Range<u32> {
+        let per = self
+            .zone_lifts
+            .max(1)
+            .saturating_mul(self.layers_per_lift.max(1));
+        let n = self.n_layers();
+        let first = (zone.max(1) - 1).saturating_mul(per).min(n);
+        first..zone.saturating_mul(per).min(n)
+    }
+
+    /// Global layer of the bottom of `lift` (1-based) of `block`, if both exist.
+    pub fn layer_of_lift(&self, block: u32, lift: u32) -> Option<u32> {
+        let b = self.blocks.get((block as usize).checked_sub(1)?)?;
+        if lift == 0 || lift > b.n_lifts {
+            return None;
+        }
+        Some(b.base_layer + (lift - 1) * self.layers_per_lift.max(1))
+    }
+
+    /// The zone `zone` of joint `joint`, if it exists.
+    pub fn zone(&self, joint: u32, zone: u32) -> Option<&Zone> {
+        self.zones
+            .binary_search_by(|z| (z.joint, z.zone).cmp(&(joint, zone)))
+            .ok()
+            .map(|i| &self.zones[i])
+    }
+
+    /// The three reading points (upstream, center, downstream) of a zone; empty if unknown.
+    pub fn zone_points_of(&self, joint: u32, zone: u32) -> &[ZonePoint] {
+        let lo = self
+            .zone_points
+            .partition_point(|p| (p.joint, p.zone) < (joint, zone));
+        let hi = self
+            .zone_points
+            .partition_point(|p| (p.joint, p.zone) <= (joint, zone));
+        &self.zone_points[lo..hi]
+    }
+
+    /// Point at bilinear coordinates (s, t) on `nodes_a` of face pair `pair`.
+    pub fn face_pair_point(&self, pair: usize, s: f64, t: f64) -> [f64; 3] {
+        let fp = &self.face_pairs[pair];
+        let n = quad_shape(s, t);
+        let mut p = [0.0; 3];
+        for (k, &node) in fp.nodes_a.iter().enumerate() {
+            for (pc, xc) in p.iter_mut().zip(self.nodes[node as usize]) {
+                *pc += n[k] * xc;
+            }
+        }
+        p
+    }
+
+    fn index(&self) -> &LiftIndex {
+        self.index.get_or_init(|| {
+            let n_blocks = self.parts.iter().fold(self.blocks.len(), |m, p| match p {
+                Part::Concrete { block, .. } => m.max(*block as usize),
+                Part::Rock => m,
+            });
+            let mut lists: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n_blocks];
+            for (e, p) in self.parts.iter().enumerate() {
+                if let Part::Concrete { block, lift } = *p {
+                    if block >= 1 && lift >= 1 {
+                        lists[block as usize - 1].push((lift, e as u32));
+                    }
+                }
+            }
+            let blocks = lists
+                .into_iter()
+                .map(|mut l| {
+                    l.sort_unstable();
+                    let n_lifts = l.last().map_or(0, |x| x.0) as usize;
+                    let mut offsets = vec![0usize; n_lifts + 1];
+                    for &(lift, _) in &l {
+                        offsets[lift as usize] += 1;
+                    }
+                    for i in 1..offsets.len() {
+                        offsets[i] += offsets[i - 1];
+                    }
+                    (l.into_iter().map(|x| x.1).collect(), offsets)
+                })
+                .collect();
+            LiftIndex { blocks }
+        })
+    }
+
+    /// Elements of `lift` of `block` (1-based both), sorted; empty if either is unknown.
+    pub fn elements_of_lift(&self, block: u32, lift: u32) -> &[u32] {
+        let idx = self.index();
+        let Some((elems, offsets)) = (block as usize)
+            .checked_sub(1)
+            .and_then(|b| idx.blocks.get(b))
+        else {
+            return &[];
+        };
+        let l = lift as usize;
+        if l == 0 || l >= offsets.len() {
+            return &[];
+        }
+        &elems[offsets[l - 1]..offsets[l]]
+    }
+
+    /// All elements of `block` (1-based), sorted by lift then element; empty if unknown.
+    pub fn elements_of_block(&self, block: u32) -> &[u32] {
+        (block as usize)
+            .checked_sub(1)
+            .and_then(|b| self.index().blocks.get(b))
+            .map_or(&[], |(e, _)| e.as_slice())
+    }
+
+    /// Rebuild the per-lift index (only needed after editing `parts` by hand).
+    pub fn reindex(&mut self) {
+        self.index = OnceLock::new();
+    }
+
+    /// Check the mesh: sizes and indices, positive Jacobian at the 8 corners of
+    /// every hex, face pairs (nodes_a = face 3 of elem_a, nodes_b on elem_b's
+    /// face 5, coincident within 1e-9 m, blocks joint/joint+1), zones (whole
+    /// bands, pairs of their joint and zone), zone points (on their pair at
+    /// (s, t)), and that `thermal_dof` merges exactly the face-pair node pairs.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        let inv = |m: String| Err(MeshError::Invalid(m));
+        let nn = self.nodes.len();
+        let ne = self.elements.len();
+        if self.parts.len() != ne {
+            return inv(format!("{} parts for {} elements", self.parts.len(), ne));
+        }
+        if self.thermal_dof.len() != nn {
+            return inv(format!(
+                "{} thermal dofs for {} nodes",
+                self.thermal_dof.len(),
+                nn
+            ));
+        }
+        if let Some(p) = self
+            .nodes
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return inv(format!("node {p} has a non-finite coordinate"));
+        }
+        if self.layer_z.windows(2).any(|w| w[1] <= w[0]) {
+            return inv("layer_z is not strictly increasing".into());
+        }
+        if self.zone_lifts == 0 || self.layers_per_lift == 0 {
+            return inv("zone_lifts and layers_per_lift must be >= 1".into());
+        }
+        // Elements: indices and corner Jacobians.
+        for (e, conn) in self.elements.iter().enumerate() {
+            if let Some(&bad) = conn.iter().find(|&&n| n as usize >= nn) {
+                return inv(format!("element {e} refers to node {bad} of {nn}"));
+            }
+            let x = self.element_coords(e);
+            for (c, r) in HEX_REF.iter().enumerate() {
+                let det = hex_jacobian_det(&x, r[0], r[1], r[2]);
+                if det.is_nan() || det <= 0.0 {
+                    return Err(MeshError::NonPositiveJacobian {
+                        elem: e,
+                        corner: c,
+                        det,
+                    });
+                }
+            }
+        }
+        // Parts vs blocks.
+        for (e, p) in self.parts.iter().enumerate() {
+            if let Part::Concrete { block, lift } = *p {
+                let ok = block >= 1
+                    && (block as usize) <= self.blocks.len()
+                    && lift >= 1
+                    && lift <= self.blocks[block as usize - 1].n_lifts;
+                if !ok {
+                    return inv(format!("element {e}: unknown block {block} / lift {lift}"));
+                }
+            }
+        }
+        for (i, b) in self.blocks.iter().enumerate() {
+            if b.block as usize != i + 1 {
+                return inv(format!("blocks[{i}] has number {}", b.block));
+            }
+        }
+        // Face pairs.
+        let tol = 1e-9;
+        for (ip, fp) in self.face_pairs.iter().enumerate() {
+            let (ea, eb) = (fp.elem_a as usize, fp.elem_b as usize);
+            if ea >= ne || eb >= ne {
+                return inv(format!("face pair {ip}: element out of range"));
+            }
+            let a = &self.elements[ea];
+            let b = &self.elements[eb];
+            if fp.nodes_a != [a[1], a[2], a[6], a[5]] {
+                return inv(format!(
+                    "face pair {ip}: nodes_a is not face 3 of element {ea}"
+                ));
+            }
+            if fp.nodes_b != [b[0], b[3], b[7], b[4]] {
+                return inv(format!(
+                    "face pair {ip}: nodes_b is not face 5 of element {eb}"
+                ));
+            }
+            match (self.parts[ea], self.parts[eb]) {
+                (Part::Concrete { block: ba, .. }, Part::Concrete { block: bb, .. })
+                    if ba == fp.joint && bb == fp.joint + 1 => {}
+                _ => {
+                    return inv(format!(
+                        "face pair {ip}: elements are not concrete of blocks {} and {}",
+                        fp.joint,
+                        fp.joint + 1
+                    ))
+                }
+            }
+            for k in 0..4 {
+                let pa = self.nodes[fp.nodes_a[k] as usize];
+                let pb = self.nodes[fp.nodes_b[k] as usize];
+                let d = dist(pa, pb);
+                if d > tol {
+                    return inv(format!("face pair {ip}: node {k} pair {d:.3e} m apart"));
+                }
+            }
+            if fp.layer >= self.n_layers() || fp.zone != self.zone_of_layer(fp.layer) {
+                return inv(format!(
+                    "face pair {ip}: layer {} / zone {} inconsistent",
+                    fp.layer, fp.zone
+                ));
+            }
+        }
+        // Zones: whole bands, every pair of the right joint/zone.
+        let mut pairs_in_zones = 0usize;
+        for z in &self.zones {
+            let band = self.zone_layers(z.zone);
+            if band.is_empty() {
+                return inv(format!(
+                    "joint {} zone {} is above the crest",
+                    z.joint, z.zone
+                ));
+            }
+            let mut per_layer: HashMap<u32, usize> = HashMap::new();
+            for &p in &z.pairs {
+                let Some(fp) = self.face_pairs.get(p as usize) else {
+                    return inv(format!(
+                        "joint {} zone {}: pair {p} out of range",
+                        z.joint, z.zone
+                    ));
+                };
+                if fp.joint != z.joint || fp.zone != z.zone {
+                    return inv(format!(
+                        "joint {} zone {}: pair {p} belongs elsewhere",
+                        z.joint, z.zone
+                    ));
+                }
+                *per_layer.entry(fp.layer).or_default() += 1;
+            }
+            let counts: Vec<usize> = band
+                .clone()
+                .map(|l| per_layer.get(&l).copied().unwrap_or(0))
+                .collect();
+            if counts.iter().any(|&c| c == 0 || c != counts[0]) || per_layer.len() != counts.len() {
+                return inv(format!(
+                    "joint {} zone {} is not a whole zone (pairs per layer {:?})",
+                    z.joint, z.zone, counts
+                ));
+            }
+            let zb = self.layer_z[band.start as usize];
+            let zt = self.layer_z[band.end as usize];
+            if (zb - z.z_bottom).abs() > tol || (zt - z.z_top).abs() > tol {
+                return inv(format!(
+                    "joint {} zone {}: wrong elevations",
+                    z.joint, z.zone
+                ));
+            }
+            pairs_in_zones += z.pairs.len();
+        }
+        if pairs_in_zones != self.face_pairs.len() {
+            return inv(format!(
+                "{} face pairs but {} in zones",
+                self.face_pairs.len(),
+                pairs_in_zones
+            ));
+        }
+        for (i, p) in self.zone_points.iter().enumerate() {
+            let Some(fp) = self.face_pairs.get(p.pair as usize) else {
+                return inv(format!("zone point {i}: pair out of range"));
+            };
+            if fp.joint != p.joint || fp.zone != p.zone || p.s.abs() > 1.0 || p.t.abs() > 1.0 {
+                return inv(format!(
+                    "zone point {i} (joint {} zone {}) is off its pair",
+                    p.joint, p.zone
+                ));
+            }
+            let q = self.face_pair_point(p.pair as usize, p.s, p.t);
+            if dist(q, p.xyz) > 1e-6 {
+                return inv(format!("zone point {i}: xyz differs from its (s, t)"));
+            }
+        }
+        // Surfaces.
+        for s in &self.surfaces {
+            if s.elem as usize >= ne || s.face >= 6 {
+                return inv(format!(
+                    "surface face ({}, {}) out of range",
+                    s.elem, s.face
+                ));
+            }
+        }
+        self.validate_thermal_dofs()
+    }
+
+    /// `thermal_dof` classes == classes of the node identifications by face pairs.
+    fn validate_thermal_dofs(&self) -> Result<(), MeshError> {
+        let nn = self.nodes.len();
+        let mut parent: Vec<u32> = (0..nn as u32).collect();
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                parent[x as usize] = parent[parent[x as usize] as usize];
+                x = parent[x as usize];
+            }
+            x
+        }
+        for fp in &self.face_pairs {
+            for k in 0..4 {
+                let ra = find(&mut parent, fp.nodes_a[k]);
+                let rb = find(&mut parent, fp.nodes_b[k]);
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+        let mut dof_of_root: HashMap<u32, u32> = HashMap::new();
+        let mut root_of_dof: Vec<u32> = vec![u32::MAX; self.n_thermal_dofs];
+        for n in 0..nn as u32 {
+            let r = find(&mut parent, n);
+            let d = self.thermal_dof[n as usize];
+            if d as usize >= self.n_thermal_dofs {
+                return Err(MeshError::Invalid(format!(
+                    "node {n}: thermal dof {d} out of range"
+                )));
+            }
+            if *dof_of_root.entry(r).or_insert(d) != d {
+                return Err(MeshError::Invalid(format!(
+                    "node {n}: joint-paired nodes have different thermal dofs"
+                )));
+            }
+            let slot = &mut root_of_dof[d as usize];
+            if *slot == u32::MAX {
+                *slot = r;
+            } else if *slot != r {
+                return Err(MeshError::Invalid(format!(
+                    "thermal dof {d} merges nodes that are not a joint pair"
+                )));
+            }
+        }
+        if root_of_dof.contains(&u32::MAX) {
+            return Err(MeshError::Invalid("some thermal dofs have no node".into()));
+        }
+        Ok(())
+    }
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}

@@ -1,13 +1,53 @@
 //! Scene files (`models/*.toml`): what is simulated, on which geometry, with
 //! which materials. Loading validates every value and names the offending key.
+//!
+//! # Format
+//!
+//! A scene is one TOML document. Top-level keys: `name`, `epoch` (day 0 of the
+//! simulation, `YYYY-MM-DD`, quoted or bare), `schedules` (folder of the CSV
+//! inputs, relative to the scene file's folder) and `effects` (a list of
+//! `hydration`, `pipe_cooling`, `ambient`, `reservoir_temperature`). Tables:
+//!
+//! | table | required | content |
+//! |---|---|---|
+//! | `[geometry]` | yes | `kind = "blocks"` or `"arch"` plus the generator's parameters ([`Geometry`]) |
+//! | `[lifts]` | yes | `height_m` |
+//! | `[joints]` | yes | `zone_height_m`, a whole number of lifts |
+//! | `[concrete]` | yes | `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `[concrete.adiabatic]` |
+//! | `[rock]` | when `geometry.rock_depth_m > 0` | rock properties and initial temperature |
+//! | `[pipes]` | with `pipe_cooling` | cooling-pipe layout ([`PipeLayout`]) |
+//! | `[air]` | with `ambient` | annual air temperature and surface film coefficient |
+//! | `[reservoir]` | with `reservoir_temperature` | reservoir water temperature by depth |
+//! | `[time]` | no | step ladder and θ-method |
+//! | `[output]` | no | snapshot dates |
+//!
+//! Unknown keys are errors (`deny_unknown_fields` everywhere). Keys carrying a
+//! unit other than the code's (m, day, °C) say so in their name. The commented
+//! reference for every key is `models/demo_arch.toml`.
+//!
+//! ```no_run
+//! use groutready::scene::Scene;
+//! let path = std::path::Path::new("models/demo_arch.toml");
+//! let scene = Scene::load(path)?;
+//! let csv_dir = scene.schedules_dir(path);
+//! # Ok::<(), groutready::scene::SceneError>(())
+//! ```
 
-use std::path::PathBuf;
+mod error;
+mod validate;
+
+use std::path::{Path, PathBuf};
 
 use chrono::NaiveDate;
 use serde::{Deserialize, Serialize};
 
 use crate::material::{AdiabaticRise, PipeLayout};
 use crate::mesh::geometry::Geometry;
+
+pub use error::SceneError;
+
+/// Seconds per day: heat flows in W are turned into J/day with this factor.
+pub const SECONDS_PER_DAY: f64 = 86_400.0;
 
 /// One physical effect a scene may switch on. Anything not listed costs nothing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -23,22 +63,14 @@ pub enum Effect {
     ReservoirTemperature,
 }
 
-impl Effect {
-    pub fn is_thermal(self) -> bool {
-        matches!(
-            self,
-            Effect::Hydration | Effect::PipeCooling | Effect::Ambient | Effect::ReservoirTemperature
-        )
-    }
-}
-
 /// A validated scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Human name shown in reports.
     pub name: String,
-    /// Day 0 of the simulation.
+    /// Day 0 of the simulation (`YYYY-MM-DD`, quoted or a bare TOML date).
+    #[serde(deserialize_with = "dates::date")]
     pub epoch: NaiveDate,
     /// Default schedules folder, relative to the scene file's folder.
     #[serde(default)]
@@ -46,20 +78,30 @@ pub struct Scene {
     /// Effects simulated (see [`Effect`]).
     #[serde(default)]
     pub effects: Vec<Effect>,
+    /// Mesh generator and its parameters (`[geometry]`, `kind = "blocks" | "arch"`).
     pub geometry: Geometry,
+    /// Lift (pour layer) height.
     pub lifts: Lifts,
+    /// Transverse joints: grouting-zone height.
     pub joints: JointSettings,
+    /// Dam concrete.
     pub concrete: Concrete,
+    /// Foundation rock; required when `geometry.rock_depth_m > 0`.
     #[serde(default)]
     pub rock: Option<Rock>,
+    /// Cooling-pipe layout; required by `pipe_cooling`.
     #[serde(default)]
     pub pipes: Option<PipeLayout>,
+    /// Air temperature and surface film; required by `ambient`.
     #[serde(default)]
     pub air: Option<Air>,
+    /// Reservoir water temperature; required by `reservoir_temperature`.
     #[serde(default)]
     pub reservoir: Option<Reservoir>,
+    /// Time stepping (all keys optional).
     #[serde(default)]
     pub time: TimeStepping,
+    /// Output settings (all keys optional).
     #[serde(default)]
     pub output: OutputSettings,
 }
@@ -67,22 +109,25 @@ pub struct Scene {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Lifts {
-    /// Lift height [m]; element layers follow lifts.
+    /// Lift height \[m\]; element layers follow lifts.
     pub height_m: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JointSettings {
-    /// Grouting-zone height [m]; must be a whole number of lifts.
+    /// Grouting-zone height \[m\]; must be a whole number of lifts.
     pub zone_height_m: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Concrete {
+    /// Density ρ [kg/m³].
     pub density_kg_m3: f64,
+    /// Specific heat c [J/(kg K)].
     pub specific_heat_j_kgk: f64,
+    /// Thermal conductivity λ [W/(m K)].
     pub conductivity_w_mk: f64,
     /// Adiabatic temperature rise; required by the `hydration` effect.
     #[serde(default)]
@@ -92,8 +137,11 @@ pub struct Concrete {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rock {
+    /// Density ρ [kg/m³].
     pub density_kg_m3: f64,
+    /// Specific heat c [J/(kg K)].
     pub specific_heat_j_kgk: f64,
+    /// Thermal conductivity λ [W/(m K)].
     pub conductivity_w_mk: f64,
     /// Initial rock temperature at the deepest foundation elevation [°C].
     pub initial_temp_c: f64,
@@ -106,7 +154,9 @@ pub struct Rock {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Air {
+    /// Annual mean air temperature A [°C].
     pub mean_c: f64,
+    /// Annual amplitude B [°C] (≥ 0).
     pub amplitude_c: f64,
     /// Day of year (1–366) of the warmest air.
     pub warmest_day_of_year: f64,
@@ -118,9 +168,13 @@ pub struct Air {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Reservoir {
+    /// Annual mean temperature of the surface water [°C].
     pub surface_mean_c: f64,
+    /// Annual amplitude of the surface water temperature [°C] (≥ 0).
     pub surface_amplitude_c: f64,
+    /// Day of year (1–366) of the warmest surface water.
     pub warmest_day_of_year: f64,
+    /// Temperature of the deep water [°C] (constant in time).
     pub bottom_temp_c: f64,
     /// Decay of the surface oscillation with depth [1/m], typically 0.03–0.05.
     pub decay_per_m: f64,
@@ -138,16 +192,18 @@ pub enum CapacityKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TimeStepping {
-    /// First step after a pour or a stage change [d], default 0.25.
+    /// First step after a pour or a stage change \[d\], default 0.25.
     pub first_step_days: f64,
     /// Growth factor of the step while nothing happens, default 2.
     pub growth: f64,
-    /// Longest step [d], default 4.
+    /// Longest step \[d\], default 4.
     pub max_step_days: f64,
     /// θ of the θ-method: 1 = backward Euler (default), 0.5 = Crank–Nicolson.
     pub theta: f64,
+    /// Capacity matrix, `lumped` (default) or `consistent`.
     pub capacity: CapacityKind,
     /// Last simulated date; default = 60 days after the last scheduled event.
+    #[serde(deserialize_with = "dates::opt_date")]
     pub end_date: Option<NaiveDate>,
 }
 
@@ -167,6 +223,302 @@ impl Default for TimeStepping {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSettings {
-    /// Dates of VTU snapshots.
+    /// Dates of VTU snapshots (not before the epoch).
+    #[serde(deserialize_with = "dates::dates")]
     pub snapshots: Vec<NaiveDate>,
+}
+
+impl Effect {
+    /// Is this a thermal effect (one that needs the heat solve)?
+    pub fn is_thermal(self) -> bool {
+        matches!(
+            self,
+            Effect::Hydration
+                | Effect::PipeCooling
+                | Effect::Ambient
+                | Effect::ReservoirTemperature
+        )
+    }
+
+    /// Every effect, in declaration order.
+    pub const ALL: [Effect; 4] = [
+        Effect::Hydration,
+        Effect::PipeCooling,
+        Effect::Ambient,
+        Effect::ReservoirTemperature,
+    ];
+
+    /// The name used in scene files (`pipe_cooling`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::Hydration => "hydration",
+            Effect::PipeCooling => "pipe_cooling",
+            Effect::Ambient => "ambient",
+            Effect::ReservoirTemperature => "reservoir_temperature",
+        }
+    }
+}
+
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Scene {
+    /// Read, parse and validate a scene file. Errors name the file (as given
+    /// in `path`), the line and column or the dotted key.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scene::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Parse and validate scene text; `origin` names it in error messages
+    /// (usually the file name, e.g. `models/demo_arch.toml`).
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene =
+            toml::from_str(text).map_err(|e| error::from_toml_error(text, origin, e))?;
+        scene.validate().map_err(|e| e.with_origin(origin))?;
+        Ok(scene)
+    }
+
+    /// Check every value and the consistency between tables. The error of a
+    /// scene not read from a file carries no origin; [`Scene::load`] and
+    /// [`Scene::from_toml_str`] add it.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        validate::validate(self)
+    }
+
+    /// The schedules folder: `schedules` resolved against the folder of the
+    /// scene file at `scene_path` (absolute paths are kept as they are).
+    pub fn schedules_dir(&self, scene_path: &Path) -> Option<PathBuf> {
+        let dir = self.schedules.as_ref()?;
+        if dir.is_absolute() {
+            return Some(dir.clone());
+        }
+        let base = scene_path.parent().unwrap_or_else(|| Path::new(""));
+        Some(base.join(dir))
+    }
+
+    /// Is `effect` switched on?
+    pub fn has(&self, effect: Effect) -> bool {
+        self.effects.contains(&effect)
+    }
+
+    /// Is any thermal effect on (i.e. is there a heat problem to solve)?
+    pub fn any_thermal(&self) -> bool {
+        self.effects.iter().any(|e| e.is_thermal())
+    }
+
+    /// Lift height \[m\].
+    pub fn lift_height_m(&self) -> f64 {
+        self.lifts.height_m
+    }
+
+    /// Grouting-zone height \[m\].
+    pub fn zone_height_m(&self) -> f64 {
+        self.joints.zone_height_m
+    }
+
+    /// Lifts per grouting zone (`zone_height_m / height_m`, a whole number in a
+    /// validated scene).
+    pub fn lifts_per_zone(&self) -> u32 {
+        let n = (self.joints.zone_height_m / self.lifts.height_m).round();
+        if n.is_finite() && n >= 1.0 {
+            n as u32
+        } else {
+            1
+        }
+    }
+
+    /// Thermal diffusivity of the concrete a = λ/(ρc) [m²/day].
+    pub fn concrete_diffusivity_m2_per_day(&self) -> f64 {
+        self.concrete.diffusivity_m2_per_day()
+    }
+
+    /// Conductivity of the concrete in J/(m·day·K) (λ·86400).
+    pub fn concrete_conductivity_j_per_m_day_k(&self) -> f64 {
+        self.concrete.conductivity_j_per_m_day_k()
+    }
+
+    /// Conductivity of the rock in J/(m·day·K), if there is a `[rock]` table.
+    pub fn rock_conductivity_j_per_m_day_k(&self) -> Option<f64> {
+        self.rock.as_ref().map(Rock::conductivity_j_per_m_day_k)
+    }
+
+    /// Thermal diffusivity of the rock [m²/day], if there is a `[rock]` table.
+    pub fn rock_diffusivity_m2_per_day(&self) -> Option<f64> {
+        self.rock.as_ref().map(Rock::diffusivity_m2_per_day)
+    }
+
+    /// Simulation day (days since the epoch) of `date`; negative before the epoch.
+    pub fn day_of(&self, date: NaiveDate) -> f64 {
+        (date - self.epoch).num_days() as f64
+    }
+}
+
+impl Concrete {
+    /// λ in J/(m·day·K).
+    pub fn conductivity_j_per_m_day_k(&self) -> f64 {
+        self.conductivity_w_mk * SECONDS_PER_DAY
+    }
+
+    /// Volumetric heat capacity ρc [J/(m³ K)].
+    pub fn heat_capacity_j_m3k(&self) -> f64 {
+        self.density_kg_m3 * self.specific_heat_j_kgk
+    }
+
+    /// Diffusivity a = λ/(ρc) [m²/day].
+    pub fn diffusivity_m2_per_day(&self) -> f64 {
+        self.conductivity_j_per_m_day_k() / self.heat_capacity_j_m3k()
+    }
+}
+
+impl Rock {
+    /// λ in J/(m·day·K).
+    pub fn conductivity_j_per_m_day_k(&self) -> f64 {
+        self.conductivity_w_mk * SECONDS_PER_DAY
+    }
+
+    /// Volumetric heat capacity ρc [J/(m³ K)].
+    pub fn heat_capacity_j_m3k(&self) -> f64 {
+        self.density_kg_m3 * self.specific_heat_j_kgk
+    }
+
+    /// Diffusivity a = λ/(ρc) [m²/day].
+    pub fn diffusivity_m2_per_day(&self) -> f64 {
+        self.conductivity_j_per_m_day_k() / self.heat_capacity_j_m3k()
+    }
+
+    /// Initial rock temperature at elevation `z` [°C], given the elevation of
+    /// the deepest foundation `z_ref` (where it is `initial_temp_c`).
+    pub fn initial_temp_at(&self, z: f64, z_ref: f64) -> f64 {
+        self.initial_temp_c + self.gradient_c_per_m * (z_ref - z)
+    }
+}
+
+impl Air {
+    /// Film coefficient β in J/(m²·day·K).
+    pub fn film_j_per_m2_day_k(&self) -> f64 {
+        self.film_w_m2k * SECONDS_PER_DAY
+    }
+
+    /// Air temperature [°C] on a (possibly fractional) day of the year.
+    pub fn temperature_c(&self, day_of_year: f64) -> f64 {
+        annual(
+            self.mean_c,
+            self.amplitude_c,
+            self.warmest_day_of_year,
+            day_of_year,
+        )
+    }
+}
+
+impl Reservoir {
+    /// Surface water temperature [°C] on a (possibly fractional) day of the year.
+    pub fn surface_temperature_c(&self, day_of_year: f64) -> f64 {
+        annual(
+            self.surface_mean_c,
+            self.surface_amplitude_c,
+            self.warmest_day_of_year,
+            day_of_year,
+        )
+    }
+
+    /// Water temperature [°C] at `depth_m` below the surface on a day of the year:
+    /// bottom + (surface(t) − bottom)·e^{−decay·depth}.
+    pub fn temperature_c(&self, depth_m: f64, day_of_year: f64) -> f64 {
+        let surface = self.surface_temperature_c(day_of_year);
+        let depth = depth_m.max(0.0);
+        self.bottom_temp_c + (surface - self.bottom_temp_c) * (-self.decay_per_m * depth).exp()
+    }
+}
+
+/// mean + amplitude·cos(2π(d − d_warmest)/365).
+fn annual(mean: f64, amplitude: f64, warmest_day: f64, day_of_year: f64) -> f64 {
+    mean + amplitude * (2.0 * std::f64::consts::PI * (day_of_year - warmest_day) / 365.0).cos()
+}
+
+/// Dates as `"YYYY-MM-DD"` strings or bare TOML dates (`epoch = 2024-01-01`).
+mod dates {
+    use std::fmt;
+
+    use chrono::NaiveDate;
+    use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+
+    fn parse<E: de::Error>(s: &str) -> Result<NaiveDate, E> {
+        let ok_shape = s.len() == 10 && s.as_bytes()[4] == b'-' && s.as_bytes()[7] == b'-';
+        match NaiveDate::parse_from_str(s, "%Y-%m-%d") {
+            Ok(d) if ok_shape => Ok(d),
+            _ => Err(E::custom(format!(
+                "expected a date YYYY-MM-DD, found \"{s}\""
+            ))),
+        }
+    }
+
+    struct DateVisitor;
+
+    impl<'de> Visitor<'de> for DateVisitor {
+        type Value = NaiveDate;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a date YYYY-MM-DD")
+        }
+
+        fn visit_str<E: de::Error>(self, s: &str) -> Result<NaiveDate, E> {
+            parse(s)
+        }
+
+        // toml hands a bare date/date-time over as a one-entry map.
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<NaiveDate, A::Error> {
+            let Some(_key) = map.next_key::<String>()? else {
+                return Err(de::Error::custom(
+                    "expected a date YYYY-MM-DD, found a table",
+                ));
+            };
+            let text: String = map.next_value()?;
+            parse(&text)
+        }
+    }
+
+    pub(super) fn date<'de, D: Deserializer<'de>>(d: D) -> Result<NaiveDate, D::Error> {
+        d.deserialize_any(DateVisitor)
+    }
+
+    struct Wrapped(NaiveDate);
+
+    impl<'de> serde::Deserialize<'de> for Wrapped {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            date(d).map(Wrapped)
+        }
+    }
+
+    pub(super) fn opt_date<'de, D: Deserializer<'de>>(d: D) -> Result<Option<NaiveDate>, D::Error> {
+        date(d).map(Some)
+    }
+
+    struct SeqVisitor;
+
+    impl<'de> Visitor<'de> for SeqVisitor {
+        type Value = Vec<NaiveDate>;
+
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a list of dates YYYY-MM-DD")
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<NaiveDate>, A::Error> {
+            let mut out = Vec::new();
+            while let Some(Wrapped(d)) = seq.next_element()? {
+                out.push(d);
+            }
+            Ok(out)
+        }
+    }
+
+    pub(super) fn dates<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<NaiveDate>, D::Error> {
+        d.deserialize_seq(SeqVisitor)
+    }
 }

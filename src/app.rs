@@ -1,0 +1,180 @@
+//! What `groutready run` does, as a library call: load and check every input,
+//! only then simulate, and write the run folder atomically.
+
+use std::path::{Path, PathBuf};
+
+use crate::mesh::{self, geometry::Geometry, Mesh};
+use crate::output::{self, RunDir};
+use crate::scene::Scene;
+use crate::schedule::{self, DamLayout, Schedules, ZoneExtent};
+use crate::sim::{RunStats, Simulation};
+
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error(transparent)]
+    Schedule(#[from] crate::schedule::ScheduleError),
+    #[error("mesh of {scene}: {source}")]
+    Mesh {
+        scene: String,
+        source: crate::mesh::MeshError,
+    },
+    #[error("{0}: no schedules folder: give --schedules DIR or set `schedules` in the scene")]
+    NoSchedules(String),
+    #[error(transparent)]
+    Sim(#[from] crate::sim::SimError),
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AppError + '_ {
+    move |source| AppError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// Inputs of a run, all loaded and cross-checked.
+pub struct Inputs {
+    pub scene_path: PathBuf,
+    pub scene: Scene,
+    pub schedules: Schedules,
+    pub mesh: Mesh,
+}
+
+/// Builds the scene's mesh.
+pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
+    let (lift, zone) = (scene.lifts.height_m, scene.joints.zone_height_m);
+    let mesh = match &scene.geometry {
+        Geometry::Blocks(g) => mesh::generate_blocks(g, lift, zone),
+        Geometry::Arch(g) => mesh::generate_arch(g, lift, zone),
+    };
+    mesh.map_err(|source| AppError::Mesh {
+        scene: origin.to_string(),
+        source,
+    })
+}
+
+/// What the schedules may refer to in this mesh: blocks with their lifts, and
+/// each joint's zones with the lifts of both blocks they span.
+pub fn dam_layout(mesh: &Mesh) -> DamLayout {
+    let lift_at = |block: u32, z: f64| -> u32 {
+        let b = &mesh.blocks[block as usize - 1];
+        ((z - b.foundation_z) / mesh.lift_height).round() as u32
+    };
+    let zones = mesh
+        .zones
+        .iter()
+        .map(|z| {
+            let side = |block: u32| {
+                (
+                    block,
+                    lift_at(block, z.z_bottom) + 1,
+                    lift_at(block, z.z_top),
+                )
+            };
+            ZoneExtent {
+                joint: z.joint,
+                zone: z.zone,
+                lifts_a: side(z.joint),
+                lifts_b: side(z.joint + 1),
+            }
+        })
+        .collect();
+    DamLayout {
+        blocks: mesh.blocks.iter().map(|b| (b.block, b.n_lifts)).collect(),
+        zones,
+    }
+}
+
+/// Loads scene, schedules and mesh and checks them against each other.
+pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<Inputs, AppError> {
+    let scene = Scene::load(scene_path)?;
+    let dir = match schedules_dir {
+        Some(d) => d.to_path_buf(),
+        None => scene
+            .schedules_dir(scene_path)
+            .ok_or_else(|| AppError::NoSchedules(scene_path.display().to_string()))?,
+    };
+    let schedules = schedule::load(&dir)?;
+    let mesh = build_mesh(&scene, &scene_path.display().to_string())?;
+    schedule::check_against(&schedules, &dam_layout(&mesh))?;
+    Ok(Inputs {
+        scene_path: scene_path.to_path_buf(),
+        scene,
+        schedules,
+        mesh,
+    })
+}
+
+/// Summary of a finished run.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub out: PathBuf,
+    pub stats: RunStats,
+    pub elements: usize,
+    pub thermal_dofs: usize,
+    pub temperature_rows: usize,
+    pub snapshots: usize,
+}
+
+/// Runs the simulation and writes the run folder `out` atomically.
+pub fn run(
+    inputs: &Inputs,
+    out: &Path,
+    progress: &mut dyn FnMut(f64, f64),
+) -> Result<RunSummary, AppError> {
+    let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules)?;
+    let staging = RunDir::create(out).map_err(io_err(out))?;
+    let fields = staging.path().join("fields");
+    std::fs::create_dir_all(&fields).map_err(io_err(&fields))?;
+    let stats = sim.run(Some(&fields), progress)?;
+
+    let temps = staging.path().join("temperatures.csv");
+    let temperature_rows = if sim.thermal.is_some() {
+        output::temperatures::write(&temps, inputs.scene.epoch, &sim.records)
+            .map_err(io_err(&temps))?
+    } else {
+        0
+    };
+    let pvd = fields.join("fields.pvd");
+    mesh::vtu::write_pvd(&pvd, &sim.snapshots).map_err(io_err(&pvd))?;
+    let summary = staging.path().join("run.txt");
+    std::fs::write(&summary, run_text(inputs, &stats)).map_err(io_err(&summary))?;
+    let snapshots = sim.snapshots.len();
+    let out = staging.commit().map_err(io_err(out))?;
+    Ok(RunSummary {
+        out,
+        stats,
+        elements: inputs.mesh.elements.len(),
+        thermal_dofs: inputs.mesh.n_thermal_dofs,
+        temperature_rows,
+        snapshots,
+    })
+}
+
+fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
+    let mut s = format!(
+        "scene: {} ({})\nepoch: {}\neffects: {:?}\nelements: {}\nthermal dofs: {}\nsteps: {}\npours: {}\nwall seconds: {:.2}\n",
+        inputs.scene.name,
+        inputs.scene_path.display(),
+        inputs.scene.epoch,
+        inputs.scene.effects,
+        inputs.mesh.elements.len(),
+        inputs.mesh.n_thermal_dofs,
+        stats.steps,
+        stats.pours,
+        stats.seconds
+    );
+    if let Some(t) = &stats.thermal {
+        s += &format!(
+            "thermal: {} symbolic, {} numeric factorisations, {} assemblies, {} pipe terms, max live dofs {}\n",
+            t.symbolic, t.numeric, t.assemblies, t.pipe_terms, t.max_dofs
+        );
+    }
+    s
+}

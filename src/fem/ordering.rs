@@ -1,0 +1,150 @@
+//! Fill-reducing orderings for [`CholeskySolver`](super::CholeskySolver).
+//!
+//! faer offers AMD. On 3-D meshes a geometric nested dissection usually
+//! gives less fill and a factorisation that is faster and better blocked:
+//! split the dofs by a plane through the median of the longest extent, take
+//! as separator the dofs of one side that are coupled to the other side,
+//! order both halves recursively and the separator last.
+
+use super::sparse::Pattern;
+
+/// Which fill-reducing ordering the Cholesky solver uses.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum Ordering {
+    /// faer's approximate minimum degree.
+    #[default]
+    Amd,
+    /// Elimination order: `perm[k]` is the dof eliminated k-th (a permutation
+    /// of 0..n), e.g. from [`nested_dissection`].
+    Custom(Vec<u32>),
+}
+
+/// Geometric nested dissection of the graph of `pattern`, using one point
+/// per dof (`dof_coords[i]`). Returns the elimination order (see
+/// [`Ordering::Custom`]). Subsets of at most `leaf_size` dofs are kept in
+/// their input order.
+///
+/// # Panics
+/// If `dof_coords.len() != pattern.n_dofs()`.
+pub fn nested_dissection(pattern: &Pattern, dof_coords: &[[f64; 3]], leaf_size: usize) -> Vec<u32> {
+    let n = pattern.n_dofs();
+    assert_eq!(dof_coords.len(), n, "one coordinate per dof");
+    // full adjacency (without the diagonal) from the upper triangle
+    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+    let mut deg = vec![0usize; n + 1];
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
+            if i as usize != j {
+                deg[i as usize + 1] += 1;
+                deg[j + 1] += 1;
+            }
+        }
+    }
+    for i in 0..n {
+        deg[i + 1] += deg[i];
+    }
+    let adj_ptr = deg;
+    let mut fill = adj_ptr.clone();
+    let mut adj = vec![0u32; adj_ptr[n]];
+    for j in 0..n {
+        for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
+            let i = i as usize;
+            if i != j {
+                adj[fill[i]] = j as u32;
+                fill[i] += 1;
+                adj[fill[j]] = i as u32;
+                fill[j] += 1;
+            }
+        }
+    }
+    drop(fill);
+
+    let mut order = Vec::with_capacity(n);
+    // side[v]: 0 = not in the current subset, 1 = side A, 2 = side B
+    let mut side = vec![0u8; n];
+    let leaf = leaf_size.max(1);
+    // explicit stack: (subset, separator to append after the subset's halves)
+    enum Task {
+        Split(Vec<u32>),
+        Emit(Vec<u32>),
+    }
+    let mut stack = vec![Task::Split((0..n as u32).collect())];
+    while let Some(task) = stack.pop() {
+        let set = match task {
+            Task::Emit(sep) => {
+                order.extend_from_slice(&sep);
+                continue;
+            }
+            Task::Split(set) => set,
+        };
+        if set.len() <= leaf {
+            order.extend_from_slice(&set);
+            continue;
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &v in &set {
+            for k in 0..3 {
+                lo[k] = lo[k].min(dof_coords[v as usize][k]);
+                hi[k] = hi[k].max(dof_coords[v as usize][k]);
+            }
+        }
+        let axis = (0..3)
+            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+            .unwrap_or(0);
+        let mut keys: Vec<f64> = set.iter().map(|&v| dof_coords[v as usize][axis]).collect();
+        let mid = keys.len() / 2;
+        let (_, &mut median, _) = keys.select_nth_unstable_by(mid, f64::total_cmp);
+        let (mut a, mut b): (Vec<u32>, Vec<u32>) = set
+            .iter()
+            .partition(|&&v| dof_coords[v as usize][axis] < median);
+        if a.is_empty() || b.is_empty() {
+            // all coordinates equal along the longest axis: no geometric split
+            order.extend_from_slice(&set);
+            continue;
+        }
+        for &v in &a {
+            side[v as usize] = 1;
+        }
+        for &v in &b {
+            side[v as usize] = 2;
+        }
+        // separator: the smaller of the two one-sided boundaries
+        let boundary = |part: &[u32], other: u8, side: &[u8]| -> Vec<bool> {
+            part.iter()
+                .map(|&v| {
+                    adj[adj_ptr[v as usize]..adj_ptr[v as usize + 1]]
+                        .iter()
+                        .any(|&w| side[w as usize] == other)
+                })
+                .collect()
+        };
+        let in_sep_b = boundary(&b, 1, &side);
+        let in_sep_a = boundary(&a, 2, &side);
+        let nb = in_sep_b.iter().filter(|&&x| x).count();
+        let na = in_sep_a.iter().filter(|&&x| x).count();
+        let mut sep = Vec::new();
+        let (part, mask) = if nb <= na {
+            (&mut b, in_sep_b)
+        } else {
+            (&mut a, in_sep_a)
+        };
+        let mut k = 0;
+        part.retain(|&v| {
+            let s = mask[k];
+            k += 1;
+            if s {
+                sep.push(v);
+            }
+            !s
+        });
+        for &v in &set {
+            side[v as usize] = 0;
+        }
+        // popped in reverse: A, then B, then the separator
+        stack.push(Task::Emit(sep));
+        stack.push(Task::Split(b));
+        stack.push(Task::Split(a));
+    }
+    debug_assert_eq!(order.len(), n);
+    order
+}

@@ -1,0 +1,367 @@
+//! Sparse Cholesky (LLᵀ) on a fixed [`Pattern`], wrapping faer.
+//!
+//! The symbolic analysis (fill-reducing ordering — faer's AMD or a custom one
+//! such as [`nested_dissection`](super::ordering::nested_dissection) —,
+//! elimination tree, supernodes) is done once in [`CholeskySolver::new`] /
+//! [`CholeskySolver::with_options`]; each [`CholeskySolver::factorize`] reuses
+//! it and the factor's value buffer, so a changed matrix with the same
+//! pattern costs one numeric factorisation only. Every phase is counted and
+//! timed in [`SolverStats`].
+//!
+//! No NaN passes silently: the matrix, the right-hand sides and the solutions
+//! are checked to be finite.
+
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::{Conj, Mat, MatMut, Par, Side};
+use thiserror::Error;
+
+use super::ordering::Ordering;
+use super::sparse::{Pattern, SparseSym};
+
+/// Why a factorisation or solve failed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SolveError {
+    /// A pivot ≤ 0 appeared: the matrix is singular or indefinite (a
+    /// floating part, a dof without stiffness, a negative coefficient).
+    #[error(
+        "matrix is not positive definite: pivot {pivot} of the elimination (dof {dof}) is not > 0"
+    )]
+    NotPositiveDefinite { pivot: usize, dof: usize },
+    /// A NaN or infinity in the input or the result.
+    #[error("non-finite value in the {what} at index {index}")]
+    NonFinite { what: &'static str, index: usize },
+    #[error("the matrix pattern differs from the pattern this solver was analysed for")]
+    PatternMismatch,
+    #[error("solve called before a successful factorize")]
+    NotFactorized,
+    #[error("dimension mismatch: the system has {expected} rows, got {got}")]
+    DimensionMismatch { expected: usize, got: usize },
+    #[error("the custom ordering is not a permutation of 0..{n}")]
+    InvalidOrdering { n: usize },
+    #[error("faer: {0}")]
+    Faer(String),
+}
+
+/// Counts and wall-clock seconds of every phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolverStats {
+    pub n_symbolic: u64,
+    pub n_numeric: u64,
+    /// Solve calls (a multi-column solve counts once).
+    pub n_solves: u64,
+    /// Right-hand-side columns solved.
+    pub n_rhs: u64,
+    pub symbolic_seconds: f64,
+    pub numeric_seconds: f64,
+    pub solve_seconds: f64,
+}
+
+/// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
+/// factorisation per matrix, any number of solves.
+pub struct CholeskySolver {
+    pattern: Arc<Pattern>,
+    /// shared by forks: one symbolic analysis serves several numeric factors
+    symbolic: Arc<SymbolicCholesky<u32>>,
+    l_values: Vec<f64>,
+    scratch: MemBuffer,
+    factorized: bool,
+    par: Par,
+    stats: Mutex<SolverStats>,
+}
+
+impl std::fmt::Debug for CholeskySolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CholeskySolver")
+            .field("n", &self.n())
+            .field("factor_nnz", &self.factor_nnz())
+            .field("supernodal", &self.is_supernodal())
+            .field("factorized", &self.factorized)
+            .field("stats", &self.stats())
+            .finish_non_exhaustive()
+    }
+}
+
+impl CholeskySolver {
+    /// Symbolic analysis of `pattern` (AMD fill-reducing ordering), using all
+    /// rayon threads for later numeric work.
+    pub fn new(pattern: Arc<Pattern>) -> Result<Self, SolveError> {
+        Self::with_parallelism(pattern, Par::rayon(0))
+    }
+
+    /// [`CholeskySolver::new`] with an explicit faer parallelism.
+    pub fn with_parallelism(pattern: Arc<Pattern>, par: Par) -> Result<Self, SolveError> {
+        Self::with_options(pattern, &Ordering::Amd, par)
+    }
+
+    /// Symbolic analysis with a chosen fill-reducing ordering and parallelism.
+    pub fn with_options(
+        pattern: Arc<Pattern>,
+        ordering: &Ordering,
+        par: Par,
+    ) -> Result<Self, SolveError> {
+        let t = Instant::now();
+        let n = pattern.n_dofs();
+        let symbolic = match ordering {
+            Ordering::Amd => factorize_symbolic_cholesky(
+                pattern.symbolic(),
+                Side::Upper,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            ),
+            Ordering::Custom(fwd) => {
+                let mut inv = vec![u32::MAX; n];
+                let valid = fwd.len() == n
+                    && fwd.iter().enumerate().all(|(k, &d)| {
+                        let ok = (d as usize) < n && inv[d as usize] == u32::MAX;
+                        if ok {
+                            inv[d as usize] = k as u32;
+                        }
+                        ok
+                    });
+                if !valid {
+                    return Err(SolveError::InvalidOrdering { n });
+                }
+                factorize_symbolic_cholesky(
+                    pattern.symbolic(),
+                    Side::Upper,
+                    SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inv, n)),
+                    Default::default(),
+                )
+            }
+        }
+        .map_err(|e| SolveError::Faer(format!("symbolic Cholesky: {e:?}")))?;
+        let scratch = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        let stats = SolverStats {
+            n_symbolic: 1,
+            symbolic_seconds: t.elapsed().as_secs_f64(),
+            ..Default::default()
+        };
+        Ok(CholeskySolver {
+            pattern,
+            symbolic: Arc::new(symbolic),
+            l_values: Vec::new(),
+            scratch,
+            factorized: false,
+            par,
+            stats: Mutex::new(stats),
+        })
+    }
+
+    /// A second solver on the same symbolic analysis (no new analysis), with
+    /// its own numeric factor: lets a caller keep factors of several matrices
+    /// of one pattern, e.g. one per time-step length.
+    pub fn fork(&self) -> Result<Self, SolveError> {
+        let scratch = MemBuffer::try_new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
+        )
+        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        Ok(CholeskySolver {
+            pattern: self.pattern.clone(),
+            symbolic: self.symbolic.clone(),
+            l_values: Vec::new(),
+            scratch,
+            factorized: false,
+            par: self.par,
+            stats: Mutex::new(SolverStats::default()),
+        })
+    }
+
+    /// The pattern the solver was analysed for.
+    pub fn pattern(&self) -> &Arc<Pattern> {
+        &self.pattern
+    }
+
+    /// Matrix order.
+    pub fn n(&self) -> usize {
+        self.pattern.n_dofs()
+    }
+
+    /// Entries of the factor L (fill included).
+    pub fn factor_nnz(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// True when faer chose its supernodal (dense-block) factorisation.
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
+    /// True after a successful [`CholeskySolver::factorize`].
+    pub fn is_factorized(&self) -> bool {
+        self.factorized
+    }
+
+    pub fn set_parallelism(&mut self, par: Par) -> Result<(), SolveError> {
+        self.scratch = MemBuffer::try_new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        self.par = par;
+        Ok(())
+    }
+
+    /// Counters and timings so far.
+    pub fn stats(&self) -> SolverStats {
+        *self.stats.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn record(&self, f: impl FnOnce(&mut SolverStats)) {
+        f(&mut self.stats.lock().unwrap_or_else(|e| e.into_inner()));
+    }
+
+    /// Numeric LLᵀ of `matrix` (same pattern), reusing the symbolic analysis.
+    /// On error the solver is left unfactorised.
+    pub fn factorize(&mut self, matrix: &SparseSym) -> Result<(), SolveError> {
+        self.factorized = false;
+        let mp = matrix.pattern();
+        if !Arc::ptr_eq(mp, &self.pattern)
+            && (mp.col_ptr() != self.pattern.col_ptr() || mp.row_idx() != self.pattern.row_idx())
+        {
+            return Err(SolveError::PatternMismatch);
+        }
+        if let Some(index) = matrix.values().iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                what: "matrix",
+                index,
+            });
+        }
+        let t = Instant::now();
+        let len = self.symbolic.len_val();
+        if self.l_values.len() != len {
+            self.l_values = Vec::new();
+            self.l_values
+                .try_reserve_exact(len)
+                .map_err(|_| SolveError::Faer(format!("out of memory for {len} factor entries")))?;
+            self.l_values.resize(len, 0.0);
+        }
+        let result = self
+            .symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.l_values,
+                matrix.as_faer(),
+                Side::Upper,
+                Default::default(),
+                self.par,
+                MemStack::new(&mut self.scratch),
+                Default::default(),
+            )
+            .map(|_| ());
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| {
+            s.n_numeric += 1;
+            s.numeric_seconds += seconds;
+        });
+        match result {
+            Ok(_) => {
+                self.factorized = true;
+                Ok(())
+            }
+            Err(DenseLltError::NonPositivePivot { index }) => {
+                // simplicial reports 1-based, supernodal 0-based positions in
+                // the permuted (elimination) order
+                let pos = match self.symbolic.raw() {
+                    SymbolicCholeskyRaw::Simplicial(_) => index.saturating_sub(1),
+                    SymbolicCholeskyRaw::Supernodal(_) => index,
+                };
+                let dof = match self.symbolic.perm() {
+                    Some(perm) => perm.arrays().0.get(pos).map_or(pos, |&d| d as usize),
+                    None => pos,
+                };
+                Err(SolveError::NotPositiveDefinite { pivot: pos, dof })
+            }
+        }
+    }
+
+    fn solve_mat(&self, rhs: MatMut<'_, f64>) -> Result<(), SolveError> {
+        if !self.factorized {
+            return Err(SolveError::NotFactorized);
+        }
+        let n = self.n();
+        if rhs.nrows() != n {
+            return Err(SolveError::DimensionMismatch {
+                expected: n,
+                got: rhs.nrows(),
+            });
+        }
+        let k = rhs.ncols();
+        for j in 0..k {
+            for i in 0..n {
+                if !rhs[(i, j)].is_finite() {
+                    return Err(SolveError::NonFinite {
+                        what: "right-hand side",
+                        index: i + j * n,
+                    });
+                }
+            }
+        }
+        let t = Instant::now();
+        let mut rhs = rhs;
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, self.par))
+            .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+            Conj::No,
+            rhs.as_mut(),
+            self.par,
+            MemStack::new(&mut mem),
+        );
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| {
+            s.n_solves += 1;
+            s.n_rhs += k as u64;
+            s.solve_seconds += seconds;
+        });
+        for j in 0..k {
+            for i in 0..n {
+                if !rhs[(i, j)].is_finite() {
+                    return Err(SolveError::NonFinite {
+                        what: "solution",
+                        index: i + j * n,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Solves A x = b in place (`rhs` = b on entry, x on exit).
+    pub fn solve_in_place(&self, rhs: &mut [f64]) -> Result<(), SolveError> {
+        let n = rhs.len();
+        self.solve_mat(MatMut::from_column_major_slice_mut(rhs, n, 1))
+    }
+
+    /// Solves A X = B for all columns of `rhs` at once.
+    pub fn solve_columns(&self, rhs: &mut Mat<f64>) -> Result<(), SolveError> {
+        self.solve_mat(rhs.as_mut())
+    }
+}
+
+/// ‖b − A x‖₂ / ‖b‖₂ (or ‖A x‖₂ when b = 0).
+pub fn relative_residual(matrix: &SparseSym, x: &[f64], b: &[f64]) -> f64 {
+    let mut ax = vec![0.0; matrix.n()];
+    matrix.mul_vec(x, &mut ax);
+    let r: f64 = ax
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (b - a) * (b - a))
+        .sum::<f64>()
+        .sqrt();
+    let nb: f64 = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if nb > 0.0 {
+        r / nb
+    } else {
+        r
+    }
+}

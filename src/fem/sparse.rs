@@ -1,0 +1,532 @@
+//! Symmetric sparse assembly with a fixed pattern.
+//!
+//! [`Pattern`] is built once from the dof lists of a set of elements (any
+//! sizes: hex8 volumes, quad4 faces, joint elements). It stores the **upper
+//! triangle** (row ≤ column) of the symmetric matrix in CSC form with sorted
+//! row indices and u32 indices — the layout faer's sparse Cholesky reads with
+//! `Side::Upper` — plus, per element, a scatter map from each local pair
+//! (a ≤ b) to its value index. Numeric assembly ([`SparseSym::add_element`]) is
+//! then a pure O(n_e²) scatter with no searching.
+//!
+//! Every dof 0..n gets a diagonal entry even if no element touches it, so a
+//! dof can always be fixed by [`SparseSym::apply_dirichlet`] without changing
+//! the pattern. An element dof equal to [`NO_DOF`] is skipped (its rows and
+//! columns are dropped), which lets callers assemble elements whose nodes are
+//! only partly in the system.
+
+use std::sync::Arc;
+
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use nalgebra::{DMatrix, Dim, Matrix, RawStorage};
+use thiserror::Error;
+
+/// Element dof marker for "not in this system": skipped by the pattern and
+/// by assembly.
+pub const NO_DOF: u32 = u32::MAX;
+
+/// Marker in the scatter map for a local pair that touches a [`NO_DOF`].
+const SKIP: u32 = u32::MAX;
+
+/// Why a pattern could not be built.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum PatternError {
+    #[error("element slot {slot}: dof {dof} is out of range (n_dofs = {n_dofs})")]
+    DofOutOfRange {
+        slot: usize,
+        dof: u32,
+        n_dofs: usize,
+    },
+    #[error("n_dofs = {n_dofs} does not fit the u32 dof indices")]
+    TooManyDofs { n_dofs: usize },
+    #[error("the pattern needs {nnz} stored entries, more than u32 value indices address")]
+    TooManyEntries { nnz: usize },
+}
+
+/// Index of local pair (a, b), a ≤ b, in the packed row-major upper triangle
+/// of an n×n element matrix: (0,0), (0,1), …, (0,n−1), (1,1), …
+#[inline]
+pub fn packed_upper_index(n: usize, a: usize, b: usize) -> usize {
+    debug_assert!(a <= b && b < n);
+    a * (2 * n - a + 1) / 2 + (b - a)
+}
+
+/// Upper-triangular CSC structure plus per-element scatter maps.
+#[derive(Debug, Clone)]
+pub struct Pattern {
+    n: usize,
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    diag_idx: Vec<u32>,
+    elem_dof_ptr: Vec<usize>,
+    elem_dofs: Vec<u32>,
+    scatter_ptr: Vec<usize>,
+    scatter: Vec<u32>,
+}
+
+impl Pattern {
+    /// Builds the pattern of the union of `elements` (each a list of dof
+    /// indices, any length). Element `k` of the list is "slot" `k` for
+    /// [`SparseSym::add_element`].
+    pub fn try_new<E: AsRef<[u32]>>(n_dofs: usize, elements: &[E]) -> Result<Self, PatternError> {
+        if n_dofs >= u32::MAX as usize {
+            return Err(PatternError::TooManyDofs { n_dofs });
+        }
+        let n = n_dofs;
+        // element dofs, flattened
+        let mut elem_dof_ptr = Vec::with_capacity(elements.len() + 1);
+        let mut scatter_ptr = Vec::with_capacity(elements.len() + 1);
+        elem_dof_ptr.push(0);
+        scatter_ptr.push(0);
+        let total: usize = elements.iter().map(|e| e.as_ref().len()).sum();
+        let mut elem_dofs = Vec::with_capacity(total);
+        for (slot, e) in elements.iter().enumerate() {
+            let e = e.as_ref();
+            for &d in e {
+                if d != NO_DOF && d as usize >= n {
+                    return Err(PatternError::DofOutOfRange {
+                        slot,
+                        dof: d,
+                        n_dofs: n,
+                    });
+                }
+            }
+            elem_dofs.extend_from_slice(e);
+            elem_dof_ptr.push(elem_dofs.len());
+            let ne = e.len();
+            scatter_ptr.push(scatter_ptr[slot] + ne * (ne + 1) / 2);
+        }
+        let n_elem = elements.len();
+
+        // dof → incident elements (each element listed once per dof)
+        let mut inc_ptr = vec![0usize; n + 1];
+        let unique_dofs = |e: usize| {
+            let d = &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]];
+            d.iter()
+                .enumerate()
+                .filter(move |&(k, &x)| x != NO_DOF && !d[..k].contains(&x))
+                .map(|(_, &x)| x as usize)
+        };
+        for e in 0..n_elem {
+            for d in unique_dofs(e) {
+                inc_ptr[d + 1] += 1;
+            }
+        }
+        for j in 0..n {
+            inc_ptr[j + 1] += inc_ptr[j];
+        }
+        let mut fill = inc_ptr.clone();
+        let mut inc = vec![0u32; inc_ptr[n]];
+        for e in 0..n_elem {
+            for d in unique_dofs(e) {
+                inc[fill[d]] = e as u32;
+                fill[d] += 1;
+            }
+        }
+        drop(fill);
+
+        // column by column: rows ≤ j, then the scatter entries of column j
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0u32);
+        let mut row_idx: Vec<u32> = Vec::with_capacity(inc.len() * 4 + n);
+        let mut diag_idx = Vec::with_capacity(n);
+        let mut scatter = vec![SKIP; *scatter_ptr.last().unwrap_or(&0)];
+        let mut mark = vec![u32::MAX; n];
+        let mut pos = vec![0u32; n];
+        let mut rows: Vec<u32> = Vec::new();
+        for j in 0..n {
+            rows.clear();
+            rows.push(j as u32);
+            mark[j] = j as u32;
+            let incident = &inc[inc_ptr[j]..inc_ptr[j + 1]];
+            for &e in incident {
+                let e = e as usize;
+                for &d in &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]] {
+                    if d != NO_DOF && (d as usize) < j && mark[d as usize] != j as u32 {
+                        mark[d as usize] = j as u32;
+                        rows.push(d);
+                    }
+                }
+            }
+            rows.sort_unstable();
+            let start = row_idx.len();
+            if start + rows.len() >= SKIP as usize {
+                return Err(PatternError::TooManyEntries {
+                    nnz: start + rows.len(),
+                });
+            }
+            for (k, &r) in rows.iter().enumerate() {
+                pos[r as usize] = (start + k) as u32;
+            }
+            row_idx.extend_from_slice(&rows);
+            diag_idx.push(pos[j]);
+            col_ptr.push(row_idx.len() as u32);
+            for &e in incident {
+                let e = e as usize;
+                let dofs = &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]];
+                let ne = dofs.len();
+                let sc = &mut scatter[scatter_ptr[e]..scatter_ptr[e + 1]];
+                for (b, &db) in dofs.iter().enumerate() {
+                    if db as usize != j {
+                        continue;
+                    }
+                    for (a, &da) in dofs.iter().enumerate() {
+                        if da == NO_DOF || da as usize > j {
+                            continue;
+                        }
+                        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+                        sc[packed_upper_index(ne, lo, hi)] = pos[da as usize];
+                    }
+                }
+            }
+        }
+        row_idx.shrink_to_fit();
+        let pattern = Pattern {
+            n,
+            col_ptr,
+            row_idx,
+            diag_idx,
+            elem_dof_ptr,
+            elem_dofs,
+            scatter_ptr,
+            scatter,
+        };
+        // verify faer's invariants once (sorted, in range, monotone col_ptr)
+        let _ = SymbolicSparseColMatRef::new_checked(
+            pattern.n,
+            pattern.n,
+            &pattern.col_ptr,
+            None,
+            &pattern.row_idx,
+        );
+        Ok(pattern)
+    }
+
+    /// [`Pattern::try_new`] for callers whose dofs are known to be valid.
+    ///
+    /// # Panics
+    /// On any [`PatternError`].
+    pub fn new<E: AsRef<[u32]>>(n_dofs: usize, elements: &[E]) -> Self {
+        match Self::try_new(n_dofs, elements) {
+            Ok(p) => p,
+            Err(e) => panic!("Pattern::new: {e}"),
+        }
+    }
+
+    /// Number of dofs (matrix order).
+    pub fn n_dofs(&self) -> usize {
+        self.n
+    }
+
+    /// Number of element slots.
+    pub fn n_elements(&self) -> usize {
+        self.elem_dof_ptr.len() - 1
+    }
+
+    /// Stored entries (upper triangle including the diagonal).
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// CSC column pointers (length n + 1).
+    pub fn col_ptr(&self) -> &[u32] {
+        &self.col_ptr
+    }
+
+    /// CSC row indices, sorted within each column, all ≤ the column.
+    pub fn row_idx(&self) -> &[u32] {
+        &self.row_idx
+    }
+
+    /// Value index of the diagonal entry of each dof.
+    pub fn diag_index(&self) -> &[u32] {
+        &self.diag_idx
+    }
+
+    /// The dofs of element `slot`, as given to the constructor.
+    pub fn element_dofs(&self, slot: usize) -> &[u32] {
+        &self.elem_dofs[self.elem_dof_ptr[slot]..self.elem_dof_ptr[slot + 1]]
+    }
+
+    /// Scatter map of element `slot`: entry [`packed_upper_index`]`(n_e, a, b)`
+    /// is the value index of the global entry of local pair (a ≤ b), or
+    /// `u32::MAX` when a or b is [`NO_DOF`].
+    pub fn scatter_index(&self, slot: usize) -> &[u32] {
+        &self.scatter[self.scatter_ptr[slot]..self.scatter_ptr[slot + 1]]
+    }
+
+    /// Value index of global entry (i, j) (either order), if stored.
+    /// Binary search; for tests and occasional lookups, not for assembly.
+    pub fn find(&self, i: usize, j: usize) -> Option<usize> {
+        let (r, c) = if i <= j { (i, j) } else { (j, i) };
+        if c >= self.n {
+            return None;
+        }
+        let s = self.col_ptr[c] as usize;
+        let e = self.col_ptr[c + 1] as usize;
+        self.row_idx[s..e]
+            .binary_search(&(r as u32))
+            .ok()
+            .map(|k| s + k)
+    }
+
+    /// faer view of the upper-triangular structure.
+    pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, u32> {
+        // SAFETY: checked by `new_checked` in `try_new`; the arrays are never
+        // mutated afterwards.
+        unsafe {
+            SymbolicSparseColMatRef::new_unchecked(
+                self.n,
+                self.n,
+                &self.col_ptr,
+                None,
+                &self.row_idx,
+            )
+        }
+    }
+
+    /// Bytes held by the structure and scatter maps (for benchmarks).
+    pub fn memory_bytes(&self) -> usize {
+        4 * (self.col_ptr.len() + self.row_idx.len() + self.diag_idx.len())
+            + 8 * (self.elem_dof_ptr.len() + self.scatter_ptr.len())
+            + 4 * (self.elem_dofs.len() + self.scatter.len())
+    }
+}
+
+/// Symmetric matrix on a shared [`Pattern`], upper triangle stored.
+#[derive(Debug, Clone)]
+pub struct SparseSym {
+    pattern: Arc<Pattern>,
+    values: Vec<f64>,
+}
+
+impl SparseSym {
+    /// Zero matrix on `pattern`.
+    pub fn new(pattern: Arc<Pattern>) -> Self {
+        let values = vec![0.0; pattern.nnz()];
+        SparseSym { pattern, values }
+    }
+
+    pub fn pattern(&self) -> &Arc<Pattern> {
+        &self.pattern
+    }
+
+    /// Matrix order.
+    pub fn n(&self) -> usize {
+        self.pattern.n
+    }
+
+    /// Stored values in CSC order of [`Pattern::row_idx`].
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// All values to 0, pattern kept.
+    pub fn set_zero(&mut self) {
+        self.values.fill(0.0);
+    }
+
+    /// self += alpha · other (same pattern).
+    ///
+    /// # Panics
+    /// If the patterns are not the same `Arc`.
+    pub fn axpy(&mut self, alpha: f64, other: &SparseSym) {
+        assert!(
+            Arc::ptr_eq(&self.pattern, &other.pattern),
+            "SparseSym::axpy needs the same pattern"
+        );
+        for (v, o) in self.values.iter_mut().zip(&other.values) {
+            *v += alpha * o;
+        }
+    }
+
+    /// Adds the symmetric element matrix `k` (n_e × n_e, in the order of
+    /// the slot's dofs). Only the upper triangle of `k` is read, except that
+    /// when two local dofs share a global dof both k_ab and k_ba are added.
+    ///
+    /// # Panics
+    /// If `k` is not n_e × n_e.
+    #[inline]
+    pub fn add_element<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        &mut self,
+        slot: usize,
+        k: &Matrix<f64, R, C, S>,
+    ) {
+        self.add_element_scaled(slot, 1.0, k);
+    }
+
+    /// Adds alpha · k (see [`SparseSym::add_element`]).
+    #[inline]
+    pub fn add_element_scaled<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        &mut self,
+        slot: usize,
+        alpha: f64,
+        k: &Matrix<f64, R, C, S>,
+    ) {
+        let p = &*self.pattern;
+        let dofs = p.element_dofs(slot);
+        let sc = p.scatter_index(slot);
+        let ne = dofs.len();
+        assert!(
+            k.nrows() == ne && k.ncols() == ne,
+            "element slot {slot} has {ne} dofs, got a {}x{} matrix",
+            k.nrows(),
+            k.ncols()
+        );
+        let mut idx = 0;
+        for a in 0..ne {
+            for b in a..ne {
+                let v = sc[idx];
+                idx += 1;
+                if v == SKIP {
+                    continue;
+                }
+                let mut x = k[(a, b)];
+                if a != b && dofs[a] == dofs[b] {
+                    x += k[(b, a)];
+                }
+                self.values[v as usize] += alpha * x;
+            }
+        }
+    }
+
+    /// Adds a diagonal element matrix (lumped capacity, lumped convection):
+    /// entry a of `d` goes to the diagonal of the slot's dof a.
+    #[inline]
+    pub fn add_element_diag(&mut self, slot: usize, alpha: f64, d: &[f64]) {
+        let p = &*self.pattern;
+        let dofs = p.element_dofs(slot);
+        assert_eq!(d.len(), dofs.len(), "element slot {slot}: diagonal length");
+        for (&dof, &x) in dofs.iter().zip(d) {
+            if dof != NO_DOF {
+                self.values[p.diag_idx[dof as usize] as usize] += alpha * x;
+            }
+        }
+    }
+
+    /// A_ii += v.
+    #[inline]
+    pub fn add_diag(&mut self, dof: usize, v: f64) {
+        self.values[self.pattern.diag_idx[dof] as usize] += v;
+    }
+
+    /// Entry (i, j) (0 when not stored). Binary search.
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        self.pattern.find(i, j).map_or(0.0, |k| self.values[k])
+    }
+
+    /// Diagonal.
+    pub fn diag(&self) -> Vec<f64> {
+        self.pattern
+            .diag_idx
+            .iter()
+            .map(|&k| self.values[k as usize])
+            .collect()
+    }
+
+    /// y = A x, using the stored upper triangle for both halves.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not of length n.
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        let p = &*self.pattern;
+        assert!(x.len() == p.n && y.len() == p.n, "mul_vec: length mismatch");
+        y.fill(0.0);
+        for j in 0..p.n {
+            let s = p.col_ptr[j] as usize;
+            let e = p.col_ptr[j + 1] as usize;
+            let xj = x[j];
+            let mut acc = 0.0;
+            // the last entry of the column is the diagonal
+            for k in s..e - 1 {
+                let i = p.row_idx[k] as usize;
+                let v = self.values[k];
+                y[i] += v * xj;
+                acc += v * x[i];
+            }
+            y[j] += acc + self.values[e - 1] * xj;
+        }
+    }
+
+    /// rhs_i −= Σ_{j fixed} A_ij u_j for every free i: the load of the
+    /// prescribed values. Call BEFORE [`SparseSym::apply_dirichlet`]. Fixed
+    /// rows of `rhs` are left alone.
+    pub fn dirichlet_correction(&self, fixed: &[bool], u: &[f64], rhs: &mut [f64]) {
+        let p = &*self.pattern;
+        assert!(fixed.len() == p.n && u.len() == p.n && rhs.len() == p.n);
+        for j in 0..p.n {
+            let s = p.col_ptr[j] as usize;
+            let e = p.col_ptr[j + 1] as usize;
+            for k in s..e - 1 {
+                let i = p.row_idx[k] as usize;
+                let v = self.values[k];
+                match (fixed[i], fixed[j]) {
+                    (false, true) => rhs[i] -= v * u[j],
+                    (true, false) => rhs[j] -= v * u[i],
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    /// Zeroes the rows and columns of fixed dofs and puts 1 on their
+    /// diagonal. The pattern is unchanged (the zeros stay stored).
+    pub fn apply_dirichlet(&mut self, fixed: &[bool]) {
+        let p = &*self.pattern;
+        assert_eq!(fixed.len(), p.n);
+        for j in 0..p.n {
+            let s = p.col_ptr[j] as usize;
+            let e = p.col_ptr[j + 1] as usize;
+            if fixed[j] {
+                self.values[s..e - 1].fill(0.0);
+                self.values[e - 1] = 1.0;
+            } else {
+                for k in s..e - 1 {
+                    if fixed[p.row_idx[k] as usize] {
+                        self.values[k] = 0.0;
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`dirichlet_correction`](SparseSym::dirichlet_correction), then
+    /// [`apply_dirichlet`](SparseSym::apply_dirichlet), then rhs_i = u_i on
+    /// fixed dofs: the solution of the modified system has x_fixed = u_fixed.
+    pub fn apply_dirichlet_with_rhs(&mut self, fixed: &[bool], u: &[f64], rhs: &mut [f64]) {
+        self.dirichlet_correction(fixed, u, rhs);
+        self.apply_dirichlet(fixed);
+        for i in 0..self.pattern.n {
+            if fixed[i] {
+                rhs[i] = u[i];
+            }
+        }
+    }
+
+    /// faer view (upper triangle; pass `Side::Upper`).
+    pub fn as_faer(&self) -> SparseColMatRef<'_, u32, f64> {
+        SparseColMatRef::new(self.pattern.symbolic(), &self.values)
+    }
+
+    /// Dense copy with both triangles (tests, debugging).
+    pub fn to_dense(&self) -> DMatrix<f64> {
+        let p = &*self.pattern;
+        let mut m = DMatrix::zeros(p.n, p.n);
+        for j in 0..p.n {
+            for k in p.col_ptr[j] as usize..p.col_ptr[j + 1] as usize {
+                let i = p.row_idx[k] as usize;
+                m[(i, j)] = self.values[k];
+                m[(j, i)] = self.values[k];
+            }
+        }
+        m
+    }
+
+    /// True when every stored value is finite.
+    pub fn is_finite(&self) -> bool {
+        self.values.iter().all(|v| v.is_finite())
+    }
+}

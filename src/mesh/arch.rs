@@ -1,0 +1,338 @@
+//! The `arch` generator: a parametric double-curvature arch dam in a valley.
+//!
+//! # Shape
+//!
+//! With H the height, `base` the deepest foundation, crest = base + H and
+//! ζ = (z − base)/H ∈ [0, 1]:
+//!
+//! * upstream-face radius R(ζ) = R_b + (R_c − R_b)·ζ;
+//! * thickness t(ζ) = t_c + (t_b − t_c)·(1 − ζ)^k (k = `thickness_exponent`);
+//! * overhang bump g(ζ) = 27/4·ζ²·(1 − ζ): g(0) = g(1) = 0, g′(0) = 0 (the
+//!   upstream face leaves the foundation vertically), maximum g(2/3) = 1;
+//! * the horizontal arch ring at ζ has its centre of curvature downstream at
+//!   (0, y_c(ζ)), y_c = R(ζ) − overhang·g(ζ): the crown's upstream face is at
+//!   y = −overhang·g(ζ) (the whole ring leans upstream by that amount);
+//! * a point at angle φ (0 at the crown, positive towards the right bank) and
+//!   across fraction a ∈ [0, 1] (0 upstream face, 1 downstream face) is
+//!   (r sin φ, y_c − r cos φ, z) with r = R − a·t; the downstream face has
+//!   radius R − t (must stay > 0).
+//!
+//! Blocks are equal angular sectors of the central angle Φ: block b spans
+//! φ ∈ [−Φ/2 + (b−1)Φ/N, −Φ/2 + bΦ/N]. Joint planes are radial (φ = const),
+//! so the duplicated joint nodes pair exactly.
+//!
+//! # Valley
+//!
+//! Block b's centre lies at f_b = (2b − 1 − N)/N along the crest (−1 left
+//! abutment, +1 right). Its height is
+//! h_b = H·max(m, (1 − |f_b|^v)/(1 − f_min^v)) (v = `valley_exponent`,
+//! m = `min_block_height_fraction`, f_min = the smallest |f_b|, so the
+//! central block(s) reach the base); its foundation crest − h_b is then
+//! rounded **down** to a zone boundary (zones are bands of `zone_lifts` lifts
+//! from the base), so every joint holds whole zones. Concrete layers are
+//! global: layer l spans [base + l·lift, base + (l+1)·lift]; when H is not a
+//! whole number of lifts the crest layer absorbs the remainder (it is between
+//! 0.5 and 1.5 lifts high).
+//!
+//! # Rock
+//!
+//! The logical grid is i along the arc (`rock_margin_elements` beyond each
+//! abutment, `elements_per_block` per block), j across (margin upstream,
+//! `elements_across`, margin downstream), k up (`rock_layers` over
+//! `rock_depth_m` below the base, then one layer per lift up to the crest).
+//! Rock fills: everything below the base; under each block up to its
+//! foundation (upstream and downstream margins too: the valley floor there is
+//! the block's foundation level); beyond the abutments up to the crest. Where
+//! a block is founded lower than its neighbour, its side face below the
+//! neighbour's foundation touches rock (shared nodes, no joint).
+//! Margin nodes: upstream radially (r = R + u·margin), downstream along +y
+//! (the downstream face point + u·margin·ŷ, which avoids the centre of
+//! curvature when the margin is wider than R − t), beyond the abutments along
+//! the crest tangent of the last joint plane (± u·margin·(cos φ, sin φ)).
+//! Rock below the base uses the base ring. Since every node of a level k has
+//! the same z, each hex's corner Jacobian is Δz times the signed area of its
+//! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
+
+use super::geometry::ArchGeometry;
+use super::grid::{self, Cell, Grid};
+use super::{Mesh, MeshError};
+
+fn check(ok: bool, name: &str, msg: impl FnOnce() -> String) -> Result<(), MeshError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(MeshError::param(name, msg()))
+    }
+}
+
+fn positive(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v > 0.0, name, || {
+        format!("must be > 0, got {v}")
+    })
+}
+
+fn non_negative(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v >= 0.0, name, || {
+        format!("must be >= 0, got {v}")
+    })
+}
+
+fn at_least(name: &str, v: u32, min: u32) -> Result<(), MeshError> {
+    check(v >= min, name, || format!("must be >= {min}, got {v}"))
+}
+
+/// The arch's ring at one elevation.
+#[derive(Debug, Clone, Copy)]
+struct Ring {
+    /// Upstream-face radius.
+    r_up: f64,
+    /// Thickness.
+    t: f64,
+    /// y of the centre of curvature.
+    yc: f64,
+}
+
+/// Overhang bump g(ζ) = 27/4·ζ²(1 − ζ), clamped to ζ ∈ [0, 1].
+pub fn overhang_bump(zeta: f64) -> f64 {
+    let z = zeta.clamp(0.0, 1.0);
+    6.75 * z * z * (1.0 - z)
+}
+
+fn ring(p: &ArchGeometry, z: f64) -> Ring {
+    let h = p.height_m;
+    let zeta = ((z - p.base_elevation_m) / h).clamp(0.0, 1.0);
+    let r_up = p.base_radius_m + (p.crest_radius_m - p.base_radius_m) * zeta;
+    let t = p.crest_thickness_m
+        + (p.base_thickness_m - p.crest_thickness_m) * (1.0 - zeta).powf(p.thickness_exponent);
+    let yc = r_up - p.overhang_m * overhang_bump(zeta);
+    Ring { r_up, t, yc }
+}
+
+/// Foundation layer (global layer index, on a zone boundary) of every block.
+fn foundation_layers(p: &ArchGeometry, layer_z: &[f64], zone_lifts: u32) -> Vec<u32> {
+    let n = p.n_blocks as f64;
+    let v = p.valley_exponent;
+    let fs: Vec<f64> = (1..=p.n_blocks)
+        .map(|b| ((2 * b) as f64 - 1.0 - n) / n)
+        .collect();
+    let f_min = fs.iter().fold(f64::INFINITY, |m, f| m.min(f.abs()));
+    let norm = 1.0 - f_min.powf(v);
+    let h = p.height_m;
+    let crest = p.base_elevation_m + h;
+    let n_layers = layer_z.len() - 1;
+    fs.iter()
+        .map(|f| {
+            let shape = if norm > 0.0 {
+                (1.0 - f.abs().powf(v)) / norm
+            } else {
+                1.0
+            };
+            let zf = crest - h * shape.max(p.min_block_height_fraction).min(1.0);
+            let tol = 1e-9 * (1.0 + h);
+            let mut base = 0usize;
+            let mut l = 0usize;
+            while l < n_layers {
+                if layer_z[l] <= zf + tol {
+                    base = l;
+                }
+                l += zone_lifts as usize;
+            }
+            base as u32
+        })
+        .collect()
+}
+
+/// Build the arch mesh of [`ArchGeometry`] with lifts of `lift_height` (m) and
+/// grouting zones of `zone_height` (m) (a whole number of lifts).
+pub fn generate_arch(
+    p: &ArchGeometry,
+    lift_height: f64,
+    zone_height: f64,
+) -> Result<Mesh, MeshError> {
+    at_least("n_blocks", p.n_blocks, 2)?;
+    positive("height_m", p.height_m)?;
+    check(p.base_elevation_m.is_finite(), "base_elevation_m", || {
+        format!("must be finite, got {}", p.base_elevation_m)
+    })?;
+    positive("crest_radius_m", p.crest_radius_m)?;
+    positive("base_radius_m", p.base_radius_m)?;
+    check(
+        p.central_angle_deg.is_finite() && p.central_angle_deg > 0.0 && p.central_angle_deg < 180.0,
+        "central_angle_deg",
+        || format!("must be in (0, 180), got {}", p.central_angle_deg),
+    )?;
+    positive("crest_thickness_m", p.crest_thickness_m)?;
+    positive("base_thickness_m", p.base_thickness_m)?;
+    positive("thickness_exponent", p.thickness_exponent)?;
+    check(p.overhang_m.is_finite(), "overhang_m", || {
+        format!("must be finite, got {}", p.overhang_m)
+    })?;
+    positive("valley_exponent", p.valley_exponent)?;
+    check(
+        p.min_block_height_fraction.is_finite()
+            && p.min_block_height_fraction > 0.0
+            && p.min_block_height_fraction <= 1.0,
+        "min_block_height_fraction",
+        || format!("must be in (0, 1], got {}", p.min_block_height_fraction),
+    )?;
+    at_least("elements_per_block", p.elements_per_block, 1)?;
+    at_least("elements_across", p.elements_across, 1)?;
+    non_negative("rock_depth_m", p.rock_depth_m)?;
+    non_negative("rock_margin_m", p.rock_margin_m)?;
+    if p.rock_depth_m > 0.0 {
+        at_least("rock_layers", p.rock_layers, 1)?;
+    }
+    if p.rock_margin_m > 0.0 {
+        at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
+    }
+    let zone_lifts = grid::zone_lifts(lift_height, zone_height)?;
+
+    // Layers: one per lift, the crest layer absorbs the remainder.
+    let h = p.height_m;
+    let base = p.base_elevation_m;
+    let crest = base + h;
+    let ratio = h / lift_height;
+    check(ratio < 1e6, "height_m", || {
+        format!("is more than a million lifts ({h} m with {lift_height} m lifts)")
+    })?;
+    let n_layers = (ratio.round() as usize).max(1);
+    let mut layer_z: Vec<f64> = (0..n_layers)
+        .map(|l| base + l as f64 * lift_height)
+        .collect();
+    layer_z.push(crest);
+
+    let m = if p.rock_margin_m > 0.0 {
+        p.rock_margin_elements as usize
+    } else {
+        0
+    };
+    let rl = if p.rock_depth_m > 0.0 {
+        p.rock_layers as usize
+    } else {
+        0
+    };
+    let epb = p.elements_per_block as usize;
+    let na = p.elements_across as usize;
+    let nd = (p.n_blocks as u64).saturating_mul(epb as u64);
+    let sizes = [
+        nd.saturating_add(2 * m as u64),
+        na as u64 + 2 * m as u64,
+        (n_layers + rl) as u64,
+    ];
+    if sizes.iter().any(|&s| s > u32::MAX as u64) {
+        return Err(MeshError::TooLarge {
+            nodes: u64::MAX,
+            elements: u64::MAX,
+            limit: grid::MAX_ENTITIES,
+        });
+    }
+    let (ni, nj, nk) = (sizes[0] as usize, sizes[1] as usize, sizes[2] as usize);
+    grid::check_size(ni, nj, nk)?;
+    let nd = nd as usize;
+
+    // Elevations of the logical levels.
+    let zs: Vec<f64> = (0..=nk)
+        .map(|k| {
+            if k < rl {
+                base - p.rock_depth_m + p.rock_depth_m * k as f64 / rl as f64
+            } else {
+                layer_z[k - rl]
+            }
+        })
+        .collect();
+    let rings: Vec<Ring> = zs.iter().map(|&z| ring(p, z)).collect();
+    for (k, r) in rings.iter().enumerate() {
+        let rd = r.r_up - r.t;
+        // also rejects NaN
+        if rd.partial_cmp(&(1e-6 * r.r_up)) != Some(std::cmp::Ordering::Greater) {
+            return Err(MeshError::param(
+                "base_thickness_m",
+                format!(
+                    "leaves no room for the arch: at z = {} the thickness {} m reaches the upstream radius {} m \
+                     (thickness must stay below the radius)",
+                    zs[k], r.t, r.r_up
+                ),
+            ));
+        }
+    }
+
+    let phi_total = p.central_angle_deg.to_radians();
+    let phi_s = -0.5 * phi_total;
+    let phi_e = 0.5 * phi_total;
+    let margin = p.rock_margin_m;
+    // Per i: (angle, extension along the tangent).
+    let along: Vec<(f64, f64)> = (0..=ni)
+        .map(|i| {
+            if i < m {
+                (phi_s, -margin * (m - i) as f64 / m as f64)
+            } else if i > m + nd {
+                (phi_e, margin * (i - m - nd) as f64 / m as f64)
+            } else {
+                (phi_s + phi_total * (i - m) as f64 / nd as f64, 0.0)
+            }
+        })
+        .collect();
+
+    let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * (nk + 1));
+    for k in 0..=nk {
+        let rg = rings[k];
+        let z = zs[k];
+        for j in 0..=nj {
+            let (r, dy) = if j < m {
+                (rg.r_up + margin * (m - j) as f64 / m as f64, 0.0)
+            } else if j <= m + na {
+                (rg.r_up - rg.t * (j - m) as f64 / na as f64, 0.0)
+            } else {
+                (rg.r_up - rg.t, margin * (j - m - na) as f64 / m as f64)
+            };
+            for &(phi, ext) in &along {
+                let (s, c) = phi.sin_cos();
+                pos.push([r * s + ext * c, rg.yc - r * c + dy + ext * s, z]);
+            }
+        }
+    }
+
+    let base_layers = foundation_layers(p, &layer_z, zone_lifts);
+    let mut cells = Vec::with_capacity(ni * nj * nk);
+    for k in 0..nk {
+        for j in 0..nj {
+            for i in 0..ni {
+                let c = if k < rl || i < m || i >= m + nd {
+                    Cell::Rock
+                } else {
+                    let layer = (k - rl) as u32;
+                    let b = (i - m) / epb;
+                    if layer < base_layers[b] {
+                        Cell::Rock
+                    } else if j >= m && j < m + na {
+                        Cell::Concrete {
+                            block: b as u32 + 1,
+                            layer,
+                        }
+                    } else {
+                        Cell::Void
+                    }
+                };
+                cells.push(c);
+            }
+        }
+    }
+
+    grid::build(Grid {
+        ni,
+        nj,
+        nk,
+        pos,
+        cells,
+        j0: m,
+        j1: m + na,
+        layer_z,
+        lift_height,
+        zone_lifts,
+        layers_per_lift: 1,
+        block_layers: base_layers
+            .iter()
+            .map(|&b| (b, n_layers as u32 - b))
+            .collect(),
+    })
+}

@@ -1,0 +1,409 @@
+//! Value and consistency checks of a parsed scene. Every error names the
+//! dotted key it is about, e.g. `concrete.conductivity_w_mk must be > 0, got -2.1`.
+
+use crate::material::{AdiabaticRise, PipeLayout};
+use crate::mesh::geometry::{ArchGeometry, BlocksGeometry, Geometry};
+
+use super::{Air, Effect, Reservoir, Rock, Scene, SceneError};
+
+type Check = Result<(), SceneError>;
+
+/// Relative tolerance of "a whole number of lifts".
+const WHOLE_TOL: f64 = 1e-9;
+
+pub(super) fn validate(s: &Scene) -> Check {
+    if s.name.trim().is_empty() {
+        return Err(SceneError::invalid("name", "name must not be empty"));
+    }
+    for (i, e) in s.effects.iter().enumerate() {
+        if s.effects[..i].contains(e) {
+            return Err(SceneError::invalid(
+                "effects",
+                format!("effects lists `{e}` more than once"),
+            ));
+        }
+    }
+
+    // Lifts and zones.
+    positive("lifts.height_m", s.lifts.height_m)?;
+    positive("joints.zone_height_m", s.joints.zone_height_m)?;
+    if whole_multiple(s.joints.zone_height_m, s.lifts.height_m).is_none() {
+        return Err(SceneError::invalid(
+            "joints.zone_height_m",
+            format!(
+                "joints.zone_height_m = {} is not a whole number of lifts (lifts.height_m = {})",
+                s.joints.zone_height_m, s.lifts.height_m
+            ),
+        ));
+    }
+
+    // Concrete.
+    let c = &s.concrete;
+    positive("concrete.density_kg_m3", c.density_kg_m3)?;
+    positive("concrete.specific_heat_j_kgk", c.specific_heat_j_kgk)?;
+    positive("concrete.conductivity_w_mk", c.conductivity_w_mk)?;
+    if let Some(rise) = &c.adiabatic {
+        adiabatic("concrete.adiabatic", rise)?;
+    }
+    if s.has(Effect::Hydration) && c.adiabatic.is_none() {
+        return Err(SceneError::invalid(
+            "concrete.adiabatic",
+            "effect `hydration` needs a [concrete.adiabatic] table, which is missing",
+        ));
+    }
+
+    // Optional tables: checked whenever present, required by their effects.
+    if let Some(rock) = &s.rock {
+        rock_table(rock)?;
+    }
+    if let Some(p) = &s.pipes {
+        pipes("pipes", p)?;
+    }
+    if s.has(Effect::PipeCooling) && s.pipes.is_none() {
+        return Err(SceneError::invalid(
+            "pipes",
+            "effect `pipe_cooling` needs a [pipes] table, which is missing",
+        ));
+    }
+    if let Some(a) = &s.air {
+        air(a)?;
+    }
+    if s.has(Effect::Ambient) && s.air.is_none() {
+        return Err(SceneError::invalid(
+            "air",
+            "effect `ambient` needs an [air] table, which is missing",
+        ));
+    }
+    if let Some(r) = &s.reservoir {
+        reservoir(r)?;
+    }
+    if s.has(Effect::ReservoirTemperature) && s.reservoir.is_none() {
+        return Err(SceneError::invalid(
+            "reservoir",
+            "effect `reservoir_temperature` needs a [reservoir] table, which is missing",
+        ));
+    }
+
+    // Geometry.
+    match &s.geometry {
+        Geometry::Blocks(g) => blocks(g, s)?,
+        Geometry::Arch(g) => arch(g, s)?,
+    }
+
+    // Time stepping.
+    let t = &s.time;
+    positive("time.first_step_days", t.first_step_days)?;
+    finite("time.growth", t.growth)?;
+    if t.growth < 1.0 {
+        return Err(SceneError::invalid(
+            "time.growth",
+            format!("time.growth must be >= 1, got {}", t.growth),
+        ));
+    }
+    finite("time.max_step_days", t.max_step_days)?;
+    if t.max_step_days < t.first_step_days {
+        return Err(SceneError::invalid(
+            "time.max_step_days",
+            format!(
+                "time.max_step_days = {} must be >= time.first_step_days = {}",
+                t.max_step_days, t.first_step_days
+            ),
+        ));
+    }
+    if !(0.5..=1.0).contains(&t.theta) {
+        return Err(SceneError::invalid(
+            "time.theta",
+            format!("time.theta must be in [0.5, 1], got {}", t.theta),
+        ));
+    }
+    if let Some(end) = t.end_date {
+        if end <= s.epoch {
+            return Err(SceneError::invalid(
+                "time.end_date",
+                format!("time.end_date = {end} must be after epoch {}", s.epoch),
+            ));
+        }
+    }
+
+    // Output.
+    for d in &s.output.snapshots {
+        if *d < s.epoch {
+            return Err(SceneError::invalid(
+                "output.snapshots",
+                format!("output.snapshots: {d} is before epoch {}", s.epoch),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `n` if `total` = n·`unit` for a whole n ≥ 1 (relative tolerance 1e-9).
+fn whole_multiple(total: f64, unit: f64) -> Option<u64> {
+    let n = (total / unit).round();
+    if !n.is_finite() || n < 1.0 {
+        return None;
+    }
+    if (total - n * unit).abs() <= WHOLE_TOL * total.abs() {
+        Some(n as u64)
+    } else {
+        None
+    }
+}
+
+fn finite(key: &str, v: f64) -> Check {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be a finite number, got {v}"),
+        ))
+    }
+}
+
+fn positive(key: &str, v: f64) -> Check {
+    finite(key, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be > 0, got {v}"),
+        ))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Check {
+    finite(key, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be >= 0, got {v}"),
+        ))
+    }
+}
+
+fn at_least_one(key: &str, v: u32) -> Check {
+    if v >= 1 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be >= 1, got {v}"),
+        ))
+    }
+}
+
+/// `lo < v < hi` when `closed_hi` is false, `lo < v <= hi` otherwise.
+fn in_range(key: &str, v: f64, lo: f64, hi: f64, closed_hi: bool) -> Check {
+    finite(key, v)?;
+    let ok = v > lo && if closed_hi { v <= hi } else { v < hi };
+    if ok {
+        Ok(())
+    } else {
+        let close = if closed_hi { ']' } else { ')' };
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be in ({lo}, {hi}{close}, got {v}"),
+        ))
+    }
+}
+
+fn day_of_year(key: &str, v: f64) -> Check {
+    finite(key, v)?;
+    if (1.0..=366.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("{key} must be a day of the year in 1..=366, got {v}"),
+        ))
+    }
+}
+
+fn adiabatic(prefix: &str, rise: &AdiabaticRise) -> Check {
+    let key = |f: &str| format!("{prefix}.{f}");
+    let theta0 = match rise {
+        AdiabaticRise::Exponential { theta0, m } => {
+            positive(&key("m"), *m)?;
+            *theta0
+        }
+        AdiabaticRise::Compound { theta0, a, b } => {
+            positive(&key("a"), *a)?;
+            in_range(&key("b"), *b, 0.0, 3.0, true)?;
+            *theta0
+        }
+        AdiabaticRise::Hyperbolic { theta0, n } => {
+            positive(&key("n"), *n)?;
+            *theta0
+        }
+    };
+    in_range(&key("theta0"), theta0, 0.0, 100.0, false)
+}
+
+fn pipes(prefix: &str, p: &PipeLayout) -> Check {
+    let key = |f: &str| format!("{prefix}.{f}");
+    positive(&key("spacing_horizontal_m"), p.spacing_horizontal_m)?;
+    positive(&key("spacing_vertical_m"), p.spacing_vertical_m)?;
+    positive(&key("length_m"), p.length_m)?;
+    positive(&key("flow_l_per_min"), p.flow_l_per_min)?;
+    positive(&key("outer_radius_m"), p.outer_radius_m)?;
+    positive(&key("inner_radius_m"), p.inner_radius_m)?;
+    if p.inner_radius_m >= p.outer_radius_m {
+        return Err(SceneError::invalid(
+            key("inner_radius_m"),
+            format!(
+                "{} = {} must be < {} = {}",
+                key("inner_radius_m"),
+                p.inner_radius_m,
+                key("outer_radius_m"),
+                p.outer_radius_m
+            ),
+        ));
+    }
+    positive(&key("wall_conductivity_w_mk"), p.wall_conductivity_w_mk)?;
+    positive(&key("water_density"), p.water_density)?;
+    positive(&key("water_specific_heat"), p.water_specific_heat)?;
+    // Zhu's equivalent cooling cylinder: radius b = 0.5835·√(S1·S2) must
+    // enclose the pipe.
+    let b = 0.5835 * (p.spacing_horizontal_m * p.spacing_vertical_m).sqrt();
+    if b <= p.outer_radius_m {
+        return Err(SceneError::invalid(
+            key("spacing_horizontal_m"),
+            format!(
+                "{prefix}: the equivalent cooling cylinder (radius 0.5835·√(spacing_horizontal_m·spacing_vertical_m) = {b:.4} m) must be wider than the pipe (outer_radius_m = {})",
+                p.outer_radius_m
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn rock_table(r: &Rock) -> Check {
+    positive("rock.density_kg_m3", r.density_kg_m3)?;
+    positive("rock.specific_heat_j_kgk", r.specific_heat_j_kgk)?;
+    positive("rock.conductivity_w_mk", r.conductivity_w_mk)?;
+    finite("rock.initial_temp_c", r.initial_temp_c)?;
+    finite("rock.gradient_c_per_m", r.gradient_c_per_m)
+}
+
+fn air(a: &Air) -> Check {
+    finite("air.mean_c", a.mean_c)?;
+    non_negative("air.amplitude_c", a.amplitude_c)?;
+    day_of_year("air.warmest_day_of_year", a.warmest_day_of_year)?;
+    positive("air.film_w_m2k", a.film_w_m2k)
+}
+
+fn reservoir(r: &Reservoir) -> Check {
+    finite("reservoir.surface_mean_c", r.surface_mean_c)?;
+    non_negative("reservoir.surface_amplitude_c", r.surface_amplitude_c)?;
+    day_of_year("reservoir.warmest_day_of_year", r.warmest_day_of_year)?;
+    finite("reservoir.bottom_temp_c", r.bottom_temp_c)?;
+    non_negative("reservoir.decay_per_m", r.decay_per_m)
+}
+
+fn rock_needed(key: &str, depth: f64, s: &Scene) -> Check {
+    if depth > 0.0 && s.rock.is_none() {
+        return Err(SceneError::invalid(
+            "rock",
+            format!("{key} = {depth} needs a [rock] table, which is missing"),
+        ));
+    }
+    Ok(())
+}
+
+fn blocks(g: &BlocksGeometry, s: &Scene) -> Check {
+    at_least_one("geometry.n_blocks", g.n_blocks)?;
+    positive("geometry.block_length_m", g.block_length_m)?;
+    positive("geometry.thickness_m", g.thickness_m)?;
+    at_least_one("geometry.n_lifts", g.n_lifts)?;
+    at_least_one("geometry.elements_per_block", g.elements_per_block)?;
+    at_least_one("geometry.elements_across", g.elements_across)?;
+    at_least_one("geometry.layers_per_lift", g.layers_per_lift)?;
+    non_negative("geometry.rock_depth_m", g.rock_depth_m)?;
+    at_least_one("geometry.rock_layers", g.rock_layers)?;
+    non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
+    at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
+    finite("geometry.base_elevation_m", g.base_elevation_m)?;
+    rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
+}
+
+fn arch(g: &ArchGeometry, s: &Scene) -> Check {
+    if g.n_blocks < 2 {
+        return Err(SceneError::invalid(
+            "geometry.n_blocks",
+            format!(
+                "geometry.n_blocks must be >= 2 for an arch, got {}",
+                g.n_blocks
+            ),
+        ));
+    }
+    positive("geometry.height_m", g.height_m)?;
+    finite("geometry.base_elevation_m", g.base_elevation_m)?;
+    positive("geometry.crest_radius_m", g.crest_radius_m)?;
+    positive("geometry.base_radius_m", g.base_radius_m)?;
+    if g.base_radius_m > g.crest_radius_m {
+        return Err(SceneError::invalid(
+            "geometry.base_radius_m",
+            format!(
+                "geometry.base_radius_m = {} must be <= geometry.crest_radius_m = {}",
+                g.base_radius_m, g.crest_radius_m
+            ),
+        ));
+    }
+    in_range(
+        "geometry.central_angle_deg",
+        g.central_angle_deg,
+        0.0,
+        180.0,
+        false,
+    )?;
+    positive("geometry.crest_thickness_m", g.crest_thickness_m)?;
+    positive("geometry.base_thickness_m", g.base_thickness_m)?;
+    if g.base_thickness_m < g.crest_thickness_m {
+        return Err(SceneError::invalid(
+            "geometry.base_thickness_m",
+            format!(
+                "geometry.base_thickness_m = {} must be >= geometry.crest_thickness_m = {}",
+                g.base_thickness_m, g.crest_thickness_m
+            ),
+        ));
+    }
+    positive("geometry.thickness_exponent", g.thickness_exponent)?;
+    finite("geometry.overhang_m", g.overhang_m)?;
+    positive("geometry.valley_exponent", g.valley_exponent)?;
+    in_range(
+        "geometry.min_block_height_fraction",
+        g.min_block_height_fraction,
+        0.0,
+        1.0,
+        true,
+    )?;
+    at_least_one("geometry.elements_per_block", g.elements_per_block)?;
+    at_least_one("geometry.elements_across", g.elements_across)?;
+    non_negative("geometry.rock_depth_m", g.rock_depth_m)?;
+    at_least_one("geometry.rock_layers", g.rock_layers)?;
+    non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
+    at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
+    if whole_multiple(g.height_m, s.lifts.height_m).is_none() {
+        return Err(SceneError::invalid(
+            "geometry.height_m",
+            format!(
+                "geometry.height_m = {} is not a whole number of lifts (lifts.height_m = {})",
+                g.height_m, s.lifts.height_m
+            ),
+        ));
+    }
+    if g.height_m < s.joints.zone_height_m {
+        return Err(SceneError::invalid(
+            "geometry.height_m",
+            format!(
+                "geometry.height_m = {} must be >= joints.zone_height_m = {}",
+                g.height_m, s.joints.zone_height_m
+            ),
+        ));
+    }
+    rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
+}

@@ -1,0 +1,428 @@
+//! Value ranges of single rows and the rules between rows.
+//!
+//! The value checks take a `found(col)` closure giving the text to quote for
+//! 0-based column `col`: the original cell text when loading, the written
+//! form when validating an in-memory [`Schedules`].
+
+use std::collections::{BTreeMap, HashMap};
+
+use chrono::NaiveDate;
+
+use super::error::ScheduleError;
+use super::read::{cell_error, EXPECTED_ID};
+use super::write;
+use super::{
+    CoolingStage, GroutingPlan, JointMeter, Pour, Schedules, COOLING_CSV, COOLING_HEADER,
+    GROUTING_CSV, GROUTING_HEADER, JOINT_METERS_CSV, JOINT_METERS_HEADER, POURS_CSV, POURS_HEADER,
+    RESERVOIR_CSV, WEATHER_CSV, WEATHER_HEADER,
+};
+
+/// Placement temperature range, °C.
+pub(crate) const PLACEMENT_RANGE_C: (f64, f64) = (0.0, 40.0);
+/// Cooling water temperature range, °C.
+pub(crate) const WATER_RANGE_C: (f64, f64) = (0.0, 30.0);
+/// Cooling target temperature range, °C.
+pub(crate) const TARGET_RANGE_C: (f64, f64) = (0.0, 40.0);
+/// Air temperature range, °C.
+pub(crate) const AIR_RANGE_C: (f64, f64) = (-60.0, 60.0);
+
+type Found<'a> = &'a dyn Fn(usize) -> String;
+
+fn within(x: f64, r: (f64, f64)) -> bool {
+    x.is_finite() && r.0 <= x && x <= r.1
+}
+
+fn id_ok(
+    file: &str,
+    header: &[&str],
+    line: usize,
+    col: usize,
+    v: u32,
+    found: Found,
+) -> Result<(), ScheduleError> {
+    if v >= 1 {
+        Ok(())
+    } else {
+        Err(cell_error(
+            file,
+            header,
+            line,
+            col,
+            EXPECTED_ID,
+            &found(col),
+        ))
+    }
+}
+
+pub(crate) fn pour_values(p: &Pour, found: Found) -> Result<(), ScheduleError> {
+    let h = &POURS_HEADER;
+    id_ok(POURS_CSV, h, p.line, 0, p.block, found)?;
+    id_ok(POURS_CSV, h, p.line, 1, p.lift, found)?;
+    if !within(p.placement_temp_c, PLACEMENT_RANGE_C) {
+        return Err(cell_error(
+            POURS_CSV,
+            h,
+            p.line,
+            3,
+            "expected a placement temperature within 0–40 °C",
+            &found(3),
+        ));
+    }
+    Ok(())
+}
+
+pub(crate) fn cooling_values(c: &CoolingStage, found: Found) -> Result<(), ScheduleError> {
+    let h = &COOLING_HEADER;
+    let err = |col: usize, expected: String| {
+        cell_error(COOLING_CSV, h, c.line, col, expected, &found(col))
+    };
+    id_ok(COOLING_CSV, h, c.line, 0, c.block, found)?;
+    id_ok(COOLING_CSV, h, c.line, 1, c.lift_from, found)?;
+    id_ok(COOLING_CSV, h, c.line, 2, c.lift_to, found)?;
+    if c.lift_to < c.lift_from {
+        return Err(err(
+            2,
+            format!("expected a lift ≥ lift_from {}", c.lift_from),
+        ));
+    }
+    if let Some(end) = c.end {
+        if end <= c.start {
+            return Err(err(
+                5,
+                format!("expected a date after start_date {}", c.start),
+            ));
+        }
+    }
+    if !within(c.water_temp_c, WATER_RANGE_C) {
+        return Err(err(
+            6,
+            "expected a water temperature within 0–30 °C".to_string(),
+        ));
+    }
+    if let Some(t) = c.target_temp_c {
+        if !within(t, TARGET_RANGE_C) {
+            return Err(err(
+                7,
+                "expected a target temperature within 0–40 °C".to_string(),
+            ));
+        }
+        if t <= c.water_temp_c {
+            return Err(err(
+                7,
+                format!(
+                    "expected a target temperature above water_temp_c {} °C",
+                    c.water_temp_c
+                ),
+            ));
+        }
+    }
+    if c.end.is_none() && c.target_temp_c.is_none() {
+        return Err(err(
+            5,
+            "expected an end date when target_temp_c is blank".to_string(),
+        ));
+    }
+    Ok(())
+}
+
+fn grouting_values(g: &GroutingPlan, found: Found) -> Result<(), ScheduleError> {
+    id_ok(GROUTING_CSV, &GROUTING_HEADER, g.line, 0, g.joint, found)?;
+    id_ok(GROUTING_CSV, &GROUTING_HEADER, g.line, 1, g.zone, found)
+}
+
+fn meter_values(m: &JointMeter, found: Found) -> Result<(), ScheduleError> {
+    let h = &JOINT_METERS_HEADER;
+    id_ok(JOINT_METERS_CSV, h, m.line, 0, m.joint, found)?;
+    id_ok(JOINT_METERS_CSV, h, m.line, 1, m.zone, found)?;
+    if !m.aperture_mm.is_finite() {
+        return Err(cell_error(
+            JOINT_METERS_CSV,
+            h,
+            m.line,
+            4,
+            "expected a finite number (mm)",
+            &found(4),
+        ));
+    }
+    Ok(())
+}
+
+/// Value rule of column 2 of weather.csv / reservoir.csv.
+pub(crate) fn series_value(
+    file: &str,
+    line: usize,
+    value: f64,
+    found: &str,
+) -> Result<(), ScheduleError> {
+    if file == WEATHER_CSV {
+        if !within(value, AIR_RANGE_C) {
+            return Err(cell_error(
+                file,
+                &WEATHER_HEADER,
+                line,
+                1,
+                "expected an air temperature within −60–60 °C",
+                found,
+            ));
+        }
+    } else if !value.is_finite() {
+        return Err(cell_error(
+            file,
+            &super::RESERVOIR_HEADER,
+            line,
+            1,
+            "expected a finite number (m)",
+            found,
+        ));
+    }
+    Ok(())
+}
+
+/// "lift 5" or "lifts 4-6".
+pub(crate) fn lifts_label(from: u32, to: u32) -> String {
+    if from == to {
+        format!("lift {from}")
+    } else {
+        format!("lifts {from}-{to}")
+    }
+}
+
+/// Duplicates, gaps, and each lift strictly after the lift below it.
+pub(crate) fn check_pours(pours: &[Pour]) -> Result<(), ScheduleError> {
+    let mut by_key: HashMap<(u32, u32), &Pour> = HashMap::with_capacity(pours.len());
+    for p in pours {
+        if let Some(first) = by_key.get(&(p.block, p.lift)) {
+            return Err(ScheduleError::row(
+                POURS_CSV,
+                p.line,
+                format!(
+                    "duplicate row: block {} lift {} is already on line {}",
+                    p.block, p.lift, first.line
+                ),
+            ));
+        }
+        by_key.insert((p.block, p.lift), p);
+    }
+    for p in pours.iter().filter(|p| p.lift > 1) {
+        if !by_key.contains_key(&(p.block, p.lift - 1)) {
+            return Err(ScheduleError::row(
+                POURS_CSV,
+                p.line,
+                format!(
+                    "block {} lift {} has no lift {} below it (lifts are numbered 1, 2, 3, ... without gaps)",
+                    p.block,
+                    p.lift,
+                    p.lift - 1
+                ),
+            ));
+        }
+    }
+    for p in pours.iter().filter(|p| p.lift > 1) {
+        let Some(below) = by_key.get(&(p.block, p.lift - 1)) else {
+            continue;
+        };
+        if p.date < below.date {
+            return Err(ScheduleError::row(
+                POURS_CSV,
+                p.line,
+                format!(
+                    "block {} lift {} poured {}, before lift {} (line {}) poured {}",
+                    p.block, p.lift, p.date, below.lift, below.line, below.date
+                ),
+            ));
+        }
+        if p.date == below.date {
+            return Err(ScheduleError::row(
+                POURS_CSV,
+                p.line,
+                format!(
+                    "block {} lift {} poured {}, the same day as lift {} (line {}); a lift must be poured after the lift below it",
+                    p.block, p.lift, p.date, below.lift, below.line
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every cooled lift poured on or before the stage start; no overlapping
+/// stages on a lift (see the module documentation for open-ended stages).
+pub(crate) fn check_cooling(cooling: &[CoolingStage], pours: &[Pour]) -> Result<(), ScheduleError> {
+    let by_key: HashMap<(u32, u32), &Pour> = pours.iter().map(|p| ((p.block, p.lift), p)).collect();
+    for c in cooling {
+        // Bounded: stops at the first lift that is not poured.
+        for lift in c.lift_from..=c.lift_to {
+            let what = format!(
+                "block {} {}: stage {} starts {}",
+                c.block,
+                lifts_label(c.lift_from, c.lift_to),
+                c.stage,
+                c.start
+            );
+            match by_key.get(&(c.block, lift)) {
+                None => {
+                    return Err(ScheduleError::row(
+                        COOLING_CSV,
+                        c.line,
+                        format!("{what}, but lift {lift} is not in {POURS_CSV}"),
+                    ))
+                }
+                Some(p) if p.date > c.start => {
+                    return Err(ScheduleError::row(
+                        COOLING_CSV,
+                        c.line,
+                        format!(
+                            "{what}, before lift {lift} is poured {} ({POURS_CSV}:{})",
+                            p.date, p.line
+                        ),
+                    ))
+                }
+                Some(_) => {}
+            }
+        }
+    }
+
+    // Stages per lift. All lifts are poured here, so the ranges are bounded.
+    let mut by_lift: BTreeMap<(u32, u32), Vec<&CoolingStage>> = BTreeMap::new();
+    for c in cooling {
+        for lift in c.lift_from..=c.lift_to {
+            by_lift.entry((c.block, lift)).or_default().push(c);
+        }
+    }
+    // Report the conflict whose later row comes first in the file.
+    let mut worst: Option<(usize, ScheduleError)> = None;
+    for ((block, lift), mut stages) in by_lift {
+        stages.sort_by_key(|c| (c.start, c.line));
+        for w in stages.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let message = if a.start == b.start {
+                Some(format!(
+                    "block {block} lift {lift}: stage {} from {} starts on the same day as stage {} (line {})",
+                    b.stage, b.start, a.stage, a.line
+                ))
+            } else {
+                match a.end {
+                    Some(end) if b.start < end => Some(format!(
+                        "block {block} lift {lift}: stage {} from {} overlaps stage {} from {} to {} (line {})",
+                        b.stage, b.start, a.stage, a.start, end, a.line
+                    )),
+                    _ => None,
+                }
+            };
+            if let Some(message) = message {
+                if worst.as_ref().is_none_or(|(line, _)| b.line < *line) {
+                    worst = Some((b.line, ScheduleError::row(COOLING_CSV, b.line, message)));
+                }
+            }
+        }
+    }
+    match worst {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
+    }
+}
+
+pub(crate) fn check_grouting(grouting: &[GroutingPlan]) -> Result<(), ScheduleError> {
+    let mut seen: HashMap<(u32, u32), usize> = HashMap::with_capacity(grouting.len());
+    for g in grouting {
+        if let Some(first) = seen.insert((g.joint, g.zone), g.line) {
+            return Err(ScheduleError::row(
+                GROUTING_CSV,
+                g.line,
+                format!(
+                    "duplicate row: joint {} zone {} is already on line {first}",
+                    g.joint, g.zone
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// No duplicate date, dates strictly increasing (in file order).
+pub(crate) fn check_series(
+    file: &str,
+    rows: impl Iterator<Item = (usize, NaiveDate)> + Clone,
+) -> Result<(), ScheduleError> {
+    let mut seen: HashMap<NaiveDate, usize> = HashMap::new();
+    for (line, date) in rows.clone() {
+        if let Some(first) = seen.insert(date, line) {
+            return Err(ScheduleError::row(
+                file,
+                line,
+                format!("duplicate date {date}, already on line {first}"),
+            ));
+        }
+    }
+    let mut prev: Option<(usize, NaiveDate)> = None;
+    for (line, date) in rows {
+        if let Some((pline, pdate)) = prev {
+            if date <= pdate {
+                return Err(ScheduleError::row(
+                    file,
+                    line,
+                    format!(
+                        "date {date} is before the previous date {pdate} (line {pline}); dates must increase"
+                    ),
+                ));
+            }
+        }
+        prev = Some((line, date));
+    }
+    Ok(())
+}
+
+pub(crate) fn check_meters(meters: &[JointMeter]) -> Result<(), ScheduleError> {
+    let mut seen = HashMap::with_capacity(meters.len());
+    for m in meters {
+        if let Some(first) = seen.insert((m.joint, m.zone, m.point, m.date), m.line) {
+            return Err(ScheduleError::row(
+                JOINT_METERS_CSV,
+                m.line,
+                format!(
+                    "duplicate row: joint {} zone {} point {} on {} is already on line {first}",
+                    m.joint, m.zone, m.point, m.date
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Runs every check of [`super::load`] on an in-memory schedule (a
+/// synthesized or edited one), quoting the values as [`super::write_dir`]
+/// would write them. Lines are the rows' `line` fields; weather and reservoir
+/// rows, which carry no line, are numbered as written (first row = line 2).
+pub fn validate(s: &Schedules) -> Result<(), ScheduleError> {
+    for p in &s.pours {
+        let f = write::pour_fields(p);
+        pour_values(p, &|i| f[i].clone())?;
+    }
+    check_pours(&s.pours)?;
+    for c in &s.cooling {
+        let f = write::cooling_fields(c);
+        cooling_values(c, &|i| f[i].clone())?;
+    }
+    check_cooling(&s.cooling, &s.pours)?;
+    for g in &s.grouting {
+        let f = write::grouting_fields(g);
+        grouting_values(g, &|i| f[i].clone())?;
+    }
+    check_grouting(&s.grouting)?;
+    for (file, series) in [(WEATHER_CSV, &s.weather), (RESERVOIR_CSV, &s.reservoir)] {
+        if let Some(rows) = series {
+            for (i, (_, v)) in rows.iter().enumerate() {
+                series_value(file, i + 2, *v, &write::num(*v))?;
+            }
+            check_series(file, rows.iter().enumerate().map(|(i, r)| (i + 2, r.0)))?;
+        }
+    }
+    if let Some(meters) = &s.joint_meters {
+        for m in meters {
+            let f = write::meter_fields(m);
+            meter_values(m, &|i| f[i].clone())?;
+        }
+        check_meters(meters)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,251 @@
+//! The staged driver: lifts are born on their pour dates, cooling stages start
+//! and stop on theirs, and the enabled physics advance step by step between
+//! events ([`timeline`]). Results are recorded at whole-day step ends.
+
+pub mod timeline;
+
+use std::path::Path;
+
+use chrono::NaiveDate;
+
+use crate::mesh::{Mesh, PointKind};
+use crate::scene::{Effect, Scene};
+use crate::schedule::Schedules;
+use crate::thermal::boundary::{day_of, AirTemperature, Series, Water};
+use crate::thermal::cooling::PlannedStage;
+use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
+
+use timeline::{snap, DayEvents, Ladder, Timeline};
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error(transparent)]
+    Thermal(#[from] ThermalError),
+    #[error("the scene has the reservoir_temperature effect but {0} has no reservoir.csv")]
+    NoReservoir(String),
+    #[error("writing snapshot {path}: {source}")]
+    Snapshot {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// Temperature history at the grouting-zone points, one row per whole day.
+#[derive(Debug, Clone, Default)]
+pub struct ZoneRecords {
+    /// (joint, zone, point) per column
+    pub points: Vec<(u32, u32, PointKind)>,
+    /// (day, value per point; NaN where the point's concrete is not yet poured)
+    pub rows: Vec<(f64, Vec<f64>)>,
+}
+
+/// Counters of one run: which systems were assembled and solved.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RunStats {
+    pub steps: usize,
+    pub pours: usize,
+    pub thermal: Option<ThermalStats>,
+    pub seconds: f64,
+}
+
+/// A staged simulation of one scene with one set of schedules.
+pub struct Simulation<'a> {
+    pub scene: &'a Scene,
+    pub mesh: &'a Mesh,
+    pub timeline: Timeline,
+    pub thermal: Option<ThermalModel>,
+    pub day: f64,
+    ladder: Ladder,
+    pub records: ZoneRecords,
+    pub snapshots: Vec<(f64, String)>,
+    pours_done: usize,
+    steps: usize,
+}
+
+impl<'a> Simulation<'a> {
+    /// Prepares a run; nothing is simulated yet. The thermal model exists only
+    /// if the scene switches on a thermal effect.
+    pub fn new(scene: &'a Scene, mesh: &'a Mesh, schedules: &Schedules) -> Result<Self, SimError> {
+        let epoch = scene.epoch;
+        let day = |d: NaiveDate| day_of(epoch, d);
+        let mut tl = Timeline::default();
+        for p in &schedules.pours {
+            tl.days.entry(day(p.date) as i64).or_default().pours.push((
+                p.block,
+                p.lift,
+                p.placement_temp_c,
+            ));
+        }
+        let stages: Vec<PlannedStage> = schedules
+            .cooling
+            .iter()
+            .map(|c| PlannedStage {
+                block: c.block,
+                lift_from: c.lift_from,
+                lift_to: c.lift_to,
+                start_day: day(c.start),
+                end_day: c.end.map(day),
+                water_temp_c: c.water_temp_c,
+                target_temp_c: c.target_temp_c,
+                line: c.line,
+            })
+            .collect();
+        if scene.has(Effect::PipeCooling) {
+            for st in &stages {
+                tl.days.entry(st.start_day as i64).or_default().stage_change = true;
+                if let Some(end) = st.end_day {
+                    tl.days.entry(end as i64).or_default().stage_change = true;
+                }
+            }
+        }
+        for &d in &scene.output.snapshots {
+            tl.days.entry(day(d) as i64).or_default().snapshot = true;
+        }
+        let last_event = tl.days.keys().next_back().copied().unwrap_or(0);
+        tl.end_day = match scene.time.end_date {
+            Some(end) => day(end) as i64,
+            None => last_event + 60,
+        };
+        tl.days.retain(|&d, _| d <= tl.end_day);
+
+        let thermal = if scene.any_thermal() {
+            let air = scene.air.clone().map(|law| {
+                AirTemperature::new(
+                    epoch,
+                    law,
+                    schedules
+                        .weather
+                        .as_ref()
+                        .map(|w| Series::from_dated(epoch, w)),
+                )
+            });
+            let water = if scene.has(Effect::ReservoirTemperature) {
+                let levels = schedules
+                    .reservoir
+                    .as_ref()
+                    .ok_or_else(|| SimError::NoReservoir(schedules.dir.display().to_string()))?;
+                scene
+                    .reservoir
+                    .clone()
+                    .map(|law| Water::new(epoch, law, Series::from_dated(epoch, levels)))
+            } else {
+                None
+            };
+            Some(ThermalModel::new(mesh, scene, stages, air, water)?)
+        } else {
+            None
+        };
+        let mut records = ZoneRecords::default();
+        records.points = mesh
+            .zone_points
+            .iter()
+            .map(|p| (p.joint, p.zone, p.kind))
+            .collect();
+        Ok(Simulation {
+            scene,
+            mesh,
+            ladder: Ladder::new(&scene.time),
+            timeline: tl,
+            thermal,
+            day: 0.0,
+            records,
+            snapshots: Vec::new(),
+            pours_done: 0,
+            steps: 0,
+        })
+    }
+
+    pub fn end_day(&self) -> f64 {
+        self.timeline.end_day as f64
+    }
+
+    /// Applies the events of the current day (pours, stage changes).
+    fn apply_events(&mut self, snapshot_dir: Option<&Path>) -> Result<(), SimError> {
+        let Some(events) = self.timeline.at(self.day).cloned() else {
+            return Ok(());
+        };
+        let DayEvents {
+            pours,
+            stage_change,
+            snapshot,
+        } = events;
+        let mut restart = stage_change;
+        for (block, lift, temp) in pours {
+            if let Some(th) = self.thermal.as_mut() {
+                th.pour(block, lift, self.day, temp);
+            }
+            self.pours_done += 1;
+            restart = true;
+        }
+        if let Some(th) = self.thermal.as_mut() {
+            restart |= th.update_stages(self.day);
+        }
+        if restart {
+            self.ladder.restart(&self.scene.time);
+        }
+        if snapshot {
+            if let Some(dir) = snapshot_dir {
+                self.write_snapshot(dir)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs to the end of the timeline. `snapshot_dir` receives VTU files on
+    /// snapshot dates; `progress` is called after each step with (day, end).
+    pub fn run(
+        &mut self,
+        snapshot_dir: Option<&Path>,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<RunStats, SimError> {
+        let start = std::time::Instant::now();
+        let end = self.end_day();
+        self.apply_events(snapshot_dir)?;
+        self.record();
+        while self.day < end {
+            let next = self.timeline.next_event_after(self.day);
+            let dt = self.ladder.next_step(self.day, next);
+            let t1 = snap(self.day + dt);
+            if let Some(th) = self.thermal.as_mut() {
+                th.step(self.day, t1)?;
+            }
+            self.day = t1;
+            self.steps += 1;
+            self.ladder.grow(&self.scene.time);
+            self.apply_events(snapshot_dir)?;
+            if self.day.fract() == 0.0 {
+                self.record();
+            }
+            progress(self.day, end);
+        }
+        Ok(RunStats {
+            steps: self.steps,
+            pours: self.pours_done,
+            thermal: self.thermal.as_ref().map(|t| t.stats),
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    fn record(&mut self) {
+        let Some(th) = &self.thermal else { return };
+        let values = self
+            .mesh
+            .zone_points
+            .iter()
+            .map(|p| th.point_temperature(self.mesh, p).unwrap_or(f64::NAN))
+            .collect();
+        self.records.rows.push((self.day, values));
+    }
+
+    fn write_snapshot(&mut self, dir: &Path) -> Result<(), SimError> {
+        let date = self.scene.epoch + chrono::Duration::days(self.day as i64);
+        let name = format!("fields_{date}.vtu");
+        let path = dir.join(&name);
+        crate::output::snapshot::write(&path, self).map_err(|source| SimError::Snapshot {
+            path: path.display().to_string(),
+            source,
+        })?;
+        self.snapshots.push((self.day, name));
+        Ok(())
+    }
+}

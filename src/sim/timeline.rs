@@ -1,0 +1,152 @@
+//! Event dates of a run and the step ladder between them.
+//!
+//! Steps land exactly on every event (pours, cooling-stage starts and ends,
+//! snapshots, the end). After a pour or a stage change the step restarts
+//! short (`first_step_days`) and grows by `growth` up to `max_step_days`
+//! while nothing happens. Sub-day steps never straddle midnight and longer
+//! steps start on midnight, so outputs are always at whole-day step ends.
+
+use std::collections::BTreeMap;
+
+use crate::scene::TimeStepping;
+
+/// What happens on one day.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DayEvents {
+    /// (block, lift, placement temperature)
+    pub pours: Vec<(u32, u32, f64)>,
+    /// a cooling stage starts or ends
+    pub stage_change: bool,
+    pub snapshot: bool,
+}
+
+/// Events keyed by whole day.
+#[derive(Debug, Clone, Default)]
+pub struct Timeline {
+    pub days: BTreeMap<i64, DayEvents>,
+    pub end_day: i64,
+}
+
+impl Timeline {
+    pub fn at(&self, day: f64) -> Option<&DayEvents> {
+        if day.fract() != 0.0 {
+            return None;
+        }
+        self.days.get(&(day as i64))
+    }
+
+    /// First event day strictly after `day`, or the end.
+    pub fn next_event_after(&self, day: f64) -> f64 {
+        let floor = day.floor() as i64;
+        self.days
+            .range(floor + 1..)
+            .next()
+            .map(|(&d, _)| d.min(self.end_day) as f64)
+            .unwrap_or(self.end_day as f64)
+    }
+}
+
+/// The step ladder state: the nominal step grows between events.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ladder {
+    pub nominal: f64,
+}
+
+impl Ladder {
+    pub fn new(cfg: &TimeStepping) -> Ladder {
+        Ladder {
+            nominal: cfg.max_step_days,
+        }
+    }
+
+    pub fn restart(&mut self, cfg: &TimeStepping) {
+        self.nominal = cfg.first_step_days;
+    }
+
+    /// Length of the next step from `day` given the next event.
+    pub fn next_step(&self, day: f64, next_event: f64) -> f64 {
+        let mut dt = self.nominal.min(next_event - day);
+        if day.fract() != 0.0 {
+            dt = dt.min(day.ceil() - day);
+        }
+        dt
+    }
+
+    pub fn grow(&mut self, cfg: &TimeStepping) {
+        self.nominal = (self.nominal * cfg.growth).min(cfg.max_step_days);
+    }
+}
+
+/// Snaps a day value to the nearest whole day when round-off put it within 1e-9.
+pub fn snap(day: f64) -> f64 {
+    let r = day.round();
+    if (day - r).abs() < 1e-9 {
+        r
+    } else {
+        day
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ladder_hits_whole_days_and_events() {
+        let cfg = TimeStepping::default(); // 0.25, ×2, max 4
+        let mut tl = Timeline {
+            end_day: 30,
+            ..Default::default()
+        };
+        tl.days.insert(
+            0,
+            DayEvents {
+                stage_change: true,
+                ..Default::default()
+            },
+        );
+        tl.days.insert(
+            10,
+            DayEvents {
+                stage_change: true,
+                ..Default::default()
+            },
+        );
+        let mut ladder = Ladder::new(&cfg);
+        let mut day = 0.0;
+        let mut ends = vec![];
+        ladder.restart(&cfg);
+        while day < 30.0 {
+            if tl.at(day).is_some() && day > 0.0 {
+                ladder.restart(&cfg);
+            }
+            let dt = ladder.next_step(day, tl.next_event_after(day));
+            day = snap(day + dt);
+            ends.push(day);
+            ladder.grow(&cfg);
+        }
+        assert_eq!(&ends[..6], &[0.25, 0.75, 1.0, 3.0, 7.0, 10.0]);
+        assert!(ends.contains(&10.0) && ends.contains(&11.0));
+        let mut prev = 0.0;
+        for &e in &ends {
+            if e - prev >= 1.0 {
+                assert_eq!(
+                    e.fract(),
+                    0.0,
+                    "step ({prev}, {e}] does not end at midnight"
+                );
+                assert_eq!(
+                    prev.fract(),
+                    0.0,
+                    "step ({prev}, {e}] does not start at midnight"
+                );
+            } else {
+                assert!(
+                    e.ceil() - prev <= 1.0,
+                    "sub-day step ({prev}, {e}] straddles midnight"
+                );
+            }
+            prev = e;
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! Benchmarks and studies: what accuracy costs in time. Figures are printed,
+//! never asserted.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Context;
+
+use crate::app::{self, RunSummary};
+use crate::scene::Scene;
+use crate::schedule::{self, SynthParams};
+use crate::sim::Simulation;
+
+/// One line per run for the CLI.
+pub fn summary_line(s: &RunSummary) -> String {
+    let mut out = format!(
+        "simulated {} steps, {} pours in {:.2} s ({} elements, {} thermal dofs)\n",
+        s.stats.steps, s.stats.pours, s.stats.seconds, s.elements, s.thermal_dofs
+    );
+    if let Some(t) = &s.stats.thermal {
+        out += &format!(
+            "thermal: {} symbolic + {} numeric factorisations, {} assemblies; temperatures.csv {} rows, {} snapshots\n",
+            t.symbolic, t.numeric, t.assemblies, s.temperature_rows, s.snapshots
+        );
+    }
+    out
+}
+
+/// Times the thermal history of each scene (no files written).
+pub fn perf(scenes: &[std::path::PathBuf]) -> anyhow::Result<()> {
+    println!(
+        "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "scene",
+        "elements",
+        "dofs",
+        "pours",
+        "steps",
+        "symb",
+        "numeric",
+        "wall_s",
+        "ms/step",
+        "fact_s",
+        "solve_s",
+        "asm_s"
+    );
+    for path in scenes {
+        let t_load = Instant::now();
+        let (scene, mesh, schedules) = load_or_synthesize(path)?;
+        let load_s = t_load.elapsed().as_secs_f64();
+        let mut sim = Simulation::new(&scene, &mesh, &schedules)?;
+        let stats = sim.run(None, &mut |_, _| {})?;
+        let t = stats.thermal.unwrap_or_default();
+        println!(
+            "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            mesh.elements.len(),
+            mesh.n_thermal_dofs,
+            stats.pours,
+            stats.steps,
+            t.symbolic,
+            t.numeric,
+            stats.seconds,
+            1e3 * stats.seconds / stats.steps.max(1) as f64,
+            t.seconds_numeric + t.seconds_symbolic,
+            t.seconds_solve,
+            t.seconds_assembly,
+        );
+        println!(
+            "{:<22} (inputs and mesh: {:.2} s; largest live system {} dofs)",
+            "", load_s, t.max_dofs
+        );
+    }
+    Ok(())
+}
+
+/// Scene, mesh and schedules; schedules synthesised when the scene's folder is missing.
+fn load_or_synthesize(
+    path: &Path,
+) -> anyhow::Result<(Scene, crate::mesh::Mesh, schedule::Schedules)> {
+    let scene = Scene::load(path)?;
+    if let Some(dir) = scene
+        .schedules_dir(path)
+        .filter(|d| d.join("pours.csv").exists())
+    {
+        let inputs = app::load_inputs(path, Some(&dir))?;
+        return Ok((inputs.scene, inputs.mesh, inputs.schedules));
+    }
+    let mesh = app::build_mesh(&scene, &path.display().to_string())?;
+    let schedules = synthesize_for(&scene, &mesh);
+    Ok((scene, mesh, schedules))
+}
+
+fn synthesize_for(scene: &Scene, mesh: &crate::mesh::Mesh) -> schedule::Schedules {
+    let layout = app::dam_layout(mesh);
+    let params = SynthParams {
+        start: scene.epoch + chrono::Duration::days(30),
+        ..SynthParams::default()
+    };
+    schedule::synthesize(&layout, &params)
+}
+
+/// Writes a synthesised schedule set for a scene; returns the number of rows.
+pub fn synth_schedules(scene_path: &Path, out: &Path) -> anyhow::Result<usize> {
+    let scene = Scene::load(scene_path)?;
+    let mesh = app::build_mesh(&scene, &scene_path.display().to_string())?;
+    let s = synthesize_for(&scene, &mesh);
+    schedule::write_dir(&s, out).with_context(|| format!("writing {}", out.display()))?;
+    Ok(s.pours.len()
+        + s.cooling.len()
+        + s.grouting.len()
+        + s.reservoir.as_ref().map_or(0, |r| r.len()))
+}

@@ -1,0 +1,99 @@
+//! Cooling stages of `cooling.csv` turned into per-lift source increments.
+//!
+//! While a stage runs on a lift, Zhu's equivalent equation adds per step
+//!   ΔS = (T0 − Tw)[φ(s1) − φ(s0)] + [H(s1) − H(s0)],
+//!   H(s) = ∫_0^s φ(s − u) θ'(τ_k + u) du,
+//! where s is time since the stage started, T0 the region's mean temperature
+//! at the start, Tw the water temperature and τ_k the lift's age at the start.
+//! Hydration is inside H, so θ' is not added again. Outside a stage the
+//! source is the adiabatic increment θ(τ1) − θ(τ0) alone. A stage ends at its
+//! end date or at the first step end where the region's mean temperature has
+//! fallen to its target: the target check is armed once the mean has been
+//! above the target during the stage, so a first-stage cooling that starts on
+//! fresh concrete cooler than its target runs through the hydration peak.
+
+use serde::{Deserialize, Serialize};
+
+use crate::material::{hydration_under_cooling, AdiabaticRise, ZhuPipe};
+
+/// One cooling row of cooling.csv, resolved to days and lift range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedStage {
+    pub block: u32,
+    pub lift_from: u32,
+    pub lift_to: u32,
+    pub start_day: f64,
+    pub end_day: Option<f64>,
+    pub water_temp_c: f64,
+    pub target_temp_c: Option<f64>,
+    /// cooling.csv line, for messages.
+    pub line: usize,
+}
+
+/// Progress of one stage; plain data so it can be checkpointed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum StageStatus {
+    Pending,
+    Active {
+        start_day: f64,
+        t0_mean: f64,
+        armed: bool,
+    },
+    Done {
+        end_day: f64,
+        reached_target: bool,
+    },
+}
+
+/// Source increment of one lift over [t0, t1], split into the adiabatic
+/// hydration heat of the step and the total (hydration + pipes), both in °C
+/// of the lift's concrete.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LiftIncrement {
+    pub hydration: f64,
+    pub total: f64,
+}
+
+/// What a lift needs to compute its source: its pour day and, if a stage runs
+/// on it, the stage data.
+pub struct LiftSourceInput<'a> {
+    pub pour_day: f64,
+    pub rise: Option<&'a AdiabaticRise>,
+    pub stage: Option<ActiveStage<'a>>,
+}
+
+/// A running stage as seen by one lift.
+pub struct ActiveStage<'a> {
+    pub pipe: &'a ZhuPipe,
+    pub start_day: f64,
+    pub t0_mean: f64,
+    pub water_temp_c: f64,
+}
+
+/// The increment of one lift over the step [t0, t1] (t0 ≥ pour day).
+pub fn lift_increment(input: &LiftSourceInput<'_>, t0: f64, t1: f64) -> LiftIncrement {
+    let age0 = (t0 - input.pour_day).max(0.0);
+    let age1 = (t1 - input.pour_day).max(0.0);
+    let hydration = input
+        .rise
+        .map(|r| r.theta(age1) - r.theta(age0))
+        .unwrap_or(0.0);
+    let total = match &input.stage {
+        None => hydration,
+        Some(st) => {
+            let s0 = (t0 - st.start_day).max(0.0);
+            let s1 = (t1 - st.start_day).max(0.0);
+            let pipe_part = (st.t0_mean - st.water_temp_c) * (st.pipe.phi(s1) - st.pipe.phi(s0));
+            let heat_part = match input.rise {
+                Some(r) => {
+                    let tau_k = (st.start_day - input.pour_day).max(0.0);
+                    hydration_under_cooling(st.pipe, r, tau_k, s1)
+                        - hydration_under_cooling(st.pipe, r, tau_k, s0)
+                }
+                None => 0.0,
+            };
+            pipe_part + heat_part
+        }
+    };
+    LiftIncrement { hydration, total }
+}

@@ -1,0 +1,270 @@
+//! The linear system of the live elements: dof numbering, exposed faces,
+//! sparse pattern with its symbolic Cholesky, and a small cache of numeric
+//! factors keyed by the step length.
+//!
+//! Rebuilt only when the set of live elements changes (a pour). The boundary
+//! matrices are rebuilt when the set of submerged nodes changes. Numeric
+//! factorisations happen only for a step length not seen since the last
+//! rebuild, so a run's factorisation count is (rebuilds × distinct Δt), which
+//! the benchmark prints.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use nalgebra::SMatrix;
+
+use crate::fem::hex8::FACES;
+use crate::fem::ordering::{nested_dissection, Ordering};
+use crate::fem::solver::{CholeskySolver, SolveError};
+use crate::fem::sparse::{Pattern, SparseSym};
+use crate::fem::ElementError;
+use crate::mesh::SurfaceKind;
+
+use super::elements::ElementData;
+
+pub(crate) const NONE: u32 = u32::MAX;
+
+type Mat8 = SMatrix<f64, 8, 8>;
+
+/// Exposed face of a live element: (element, local face).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ExposedFace {
+    pub elem: u32,
+    pub face: u8,
+    /// The mesh marks it as a face that can be under the reservoir.
+    pub wet: bool,
+}
+
+/// Incremental count of element faces of the live set, keyed by their sorted
+/// thermal dofs: a face owned by exactly one live element is exposed.
+#[derive(Debug, Clone, Default)]
+pub struct FaceCounter {
+    faces: HashMap<[u32; 4], (u32, u32, u8)>, // key → (count, elem, face)
+}
+
+impl FaceCounter {
+    pub fn add_element(&mut self, elem: u32, dofs: &[u32; 8]) {
+        for (f, local) in FACES.iter().enumerate() {
+            let mut key = [
+                dofs[local[0]],
+                dofs[local[1]],
+                dofs[local[2]],
+                dofs[local[3]],
+            ];
+            key.sort_unstable();
+            let slot = self.faces.entry(key).or_insert((0, elem, f as u8));
+            slot.0 += 1;
+        }
+    }
+
+    /// Exposed faces except those on the far model boundary (adiabatic).
+    pub fn exposed(&self, far: &HashMap<(u32, u8), SurfaceKind>) -> Vec<ExposedFace> {
+        let mut out: Vec<ExposedFace> = self
+            .faces
+            .values()
+            .filter(|(count, _, _)| *count == 1)
+            .filter_map(|&(_, elem, face)| match far.get(&(elem, face)) {
+                Some(SurfaceKind::Far) => None,
+                Some(SurfaceKind::Wet) => Some(ExposedFace {
+                    elem,
+                    face,
+                    wet: true,
+                }),
+                _ => Some(ExposedFace {
+                    elem,
+                    face,
+                    wet: false,
+                }),
+            })
+            .collect();
+        // HashMap order is random; sort so assembly (and round-off) is reproducible.
+        out.sort_unstable_by_key(|f| (f.elem, f.face));
+        out
+    }
+}
+
+/// Everything that depends on the live element set.
+pub struct LiveSystem {
+    /// live index → thermal dof
+    pub dofs: Vec<u32>,
+    /// thermal dof → live index or NONE
+    pub index_of: Vec<u32>,
+    /// live elements, in pattern slot order
+    pub elems: Vec<u32>,
+    /// element dofs in live numbering, per slot
+    pub local_dofs: Vec<[u32; 8]>,
+    pub exposed: Vec<ExposedFace>,
+    pub pattern: Arc<Pattern>,
+    /// lumped capacity per live dof [J/K]
+    pub cap_lumped: Vec<f64>,
+    /// consistent capacity, when the scene asks for it
+    pub cap_consistent: Option<SparseSym>,
+    /// K + H_air (no Dirichlet rows) [J/(day K)]
+    pub kh: SparseSym,
+    /// ∫ β N dA over air faces per live dof: the air load is this × Ta
+    pub air_load: Vec<f64>,
+    /// live dofs with a prescribed (water) temperature
+    pub fixed: Vec<bool>,
+    solver: CholeskySolver,
+    factors: Vec<(u64, CholeskySolver)>,
+}
+
+impl LiveSystem {
+    /// Builds the numbering, pattern and symbolic factorisation for `live_elems`.
+    pub fn new(
+        dof_xyz: &[[f64; 3]],
+        live_elems: Vec<u32>,
+        data: &ElementData,
+        exposed: Vec<ExposedFace>,
+        consistent: bool,
+    ) -> Result<LiveSystem, SolveError> {
+        let mut index_of = vec![NONE; dof_xyz.len()];
+        let mut dofs = Vec::new();
+        let mut local_dofs = Vec::with_capacity(live_elems.len());
+        for &e in &live_elems {
+            let mut ld = [0u32; 8];
+            for (k, &d) in data.dofs[e as usize].iter().enumerate() {
+                if index_of[d as usize] == NONE {
+                    index_of[d as usize] = dofs.len() as u32;
+                    dofs.push(d);
+                }
+                ld[k] = index_of[d as usize];
+            }
+            local_dofs.push(ld);
+        }
+        let n = dofs.len();
+        let pattern = Arc::new(Pattern::new(n, &local_dofs));
+        // Nested dissection on the dof coordinates halves the fill of AMD on
+        // 3-D blocks and makes the numeric factorisation several times faster.
+        let xyz: Vec<[f64; 3]> = dofs.iter().map(|&d| dof_xyz[d as usize]).collect();
+        let ordering = Ordering::Custom(nested_dissection(&pattern, &xyz, 64));
+        let solver = CholeskySolver::with_options(pattern.clone(), &ordering, faer::Par::rayon(0))?;
+
+        let mut cap_lumped = vec![0.0; n];
+        for (slot, &e) in live_elems.iter().enumerate() {
+            for (k, &c) in data.cap_lumped[e as usize].iter().enumerate() {
+                cap_lumped[local_dofs[slot][k] as usize] += c;
+            }
+        }
+        let cap_consistent = if consistent {
+            let mut m = SparseSym::new(pattern.clone());
+            for (slot, &e) in live_elems.iter().enumerate() {
+                m.add_element(slot, &data.cap_consistent(e as usize));
+            }
+            Some(m)
+        } else {
+            None
+        };
+        let kh = SparseSym::new(pattern.clone());
+        let mut sys = LiveSystem {
+            dofs,
+            index_of,
+            elems: live_elems,
+            local_dofs,
+            exposed,
+            pattern,
+            cap_lumped,
+            cap_consistent,
+            kh,
+            air_load: vec![0.0; n],
+            fixed: vec![false; n],
+            solver,
+            factors: Vec::new(),
+        };
+        sys.assemble_kh(data, None)
+            .expect("no faces are integrated without a film coefficient");
+        Ok(sys)
+    }
+
+    pub fn n(&self) -> usize {
+        self.dofs.len()
+    }
+
+    /// Reassembles K + H_air with the current exposed faces; air convection is
+    /// dropped on faces whose four nodes are all submerged. Clears the factor cache.
+    pub fn assemble_kh(
+        &mut self,
+        data: &ElementData,
+        beta_day: Option<f64>,
+    ) -> Result<(), ElementError> {
+        let mut face_of_slot: HashMap<u32, Vec<u8>> = HashMap::new();
+        if beta_day.is_some() {
+            let slot_of: HashMap<u32, u32> = self
+                .elems
+                .iter()
+                .enumerate()
+                .map(|(s, &e)| (e, s as u32))
+                .collect();
+            for f in &self.exposed {
+                face_of_slot
+                    .entry(slot_of[&f.elem])
+                    .or_default()
+                    .push(f.face);
+            }
+        }
+        self.kh.set_zero();
+        self.air_load.iter_mut().for_each(|v| *v = 0.0);
+        for (slot, &e) in self.elems.iter().enumerate() {
+            let mut local: Mat8 = data.ke[e as usize];
+            if let (Some(beta), Some(faces)) = (beta_day, face_of_slot.get(&(slot as u32))) {
+                for &face in faces {
+                    let ids = FACES[face as usize];
+                    let ld = &self.local_dofs[slot];
+                    if ids.iter().all(|&k| self.fixed[ld[k] as usize]) {
+                        continue;
+                    }
+                    let (h, load) = data.face_convection(e as usize, face as usize, beta)?;
+                    for a in 0..4 {
+                        for b in 0..4 {
+                            local[(ids[a], ids[b])] += h[(a, b)];
+                        }
+                        self.air_load[ld[ids[a]] as usize] += load[a];
+                    }
+                }
+            }
+            self.kh.add_element(slot, &local);
+        }
+        self.factors.clear();
+        Ok(())
+    }
+
+    /// The factor of A = C + θΔt(K+H) with Dirichlet rows, from the cache or new.
+    /// Returns the factor and whether it was computed now.
+    pub fn factor(&mut self, dt: f64, theta: f64) -> Result<(&CholeskySolver, bool), SolveError> {
+        let key = dt.to_bits() ^ theta.to_bits().rotate_left(17);
+        if let Some(pos) = self.factors.iter().position(|(k, _)| *k == key) {
+            return Ok((&self.factors[pos].1, false));
+        }
+        let mut a = SparseSym::new(self.pattern.clone());
+        a.axpy(theta * dt, &self.kh);
+        match &self.cap_consistent {
+            Some(c) => a.axpy(1.0, c),
+            None => {
+                for (i, &c) in self.cap_lumped.iter().enumerate() {
+                    a.add_diag(i, c);
+                }
+            }
+        }
+        a.apply_dirichlet(&self.fixed);
+        let mut solver = self.solver.fork()?;
+        solver.factorize(&a)?;
+        // A handful of step lengths recur (the step ladder); keep the last few.
+        if self.factors.len() >= 6 {
+            self.factors.remove(0);
+        }
+        self.factors.push((key, solver));
+        Ok((&self.factors.last().expect("just pushed").1, true))
+    }
+
+    /// y = C x
+    pub fn cap_mul(&self, x: &[f64], y: &mut [f64]) {
+        match &self.cap_consistent {
+            Some(c) => c.mul_vec(x, y),
+            None => {
+                for ((yi, ci), xi) in y.iter_mut().zip(&self.cap_lumped).zip(x) {
+                    *yi = ci * xi;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,118 @@
+//! Builders shared by the integration tests.
+#![allow(dead_code)]
+
+use chrono::NaiveDate;
+use groutready::fem::hex8::FACES;
+use groutready::mesh::{self, geometry::BlocksGeometry, Mesh, SurfaceFace, SurfaceKind};
+use groutready::scene::Scene;
+
+pub fn date(y: i32, m: u32, d: u32) -> NaiveDate {
+    NaiveDate::from_ymd_opt(y, m, d).unwrap()
+}
+
+/// A scene from TOML text with the given effects and extra tables.
+pub fn scene(effects: &str, geometry: &str, extra: &str) -> Scene {
+    let text = format!(
+        r#"
+name = "test"
+epoch = "2024-01-01"
+effects = [{effects}]
+{extra}
+[geometry]
+{geometry}
+[lifts]
+height_m = 3.0
+[joints]
+zone_height_m = 3.0
+[concrete]
+density_kg_m3 = 2400.0
+specific_heat_j_kgk = 950.0
+conductivity_w_mk = 2.2
+adiabatic = {{ form = "exponential", theta0 = 25.0, m = 0.35 }}
+"#
+    );
+    Scene::from_toml_str(&text, "test.toml").unwrap_or_else(|e| panic!("{e}"))
+}
+
+pub fn blocks_geometry(
+    n_blocks: u32,
+    length: f64,
+    thickness: f64,
+    n_lifts: u32,
+    nx: u32,
+    ny: u32,
+) -> String {
+    format!(
+        "kind = \"blocks\"\nn_blocks = {n_blocks}\nblock_length_m = {length}\nthickness_m = {thickness}\n\
+         n_lifts = {n_lifts}\nelements_per_block = {nx}\nelements_across = {ny}\n"
+    )
+}
+
+pub fn blocks_mesh(scene: &Scene) -> Mesh {
+    match &scene.geometry {
+        mesh::geometry::Geometry::Blocks(g) => {
+            mesh::generate_blocks(g, scene.lifts.height_m, scene.joints.zone_height_m).unwrap()
+        }
+        _ => panic!("blocks scene expected"),
+    }
+}
+
+pub fn plain_blocks(g: &BlocksGeometry, lift: f64, zone: f64) -> Mesh {
+    mesh::generate_blocks(g, lift, zone).unwrap()
+}
+
+/// Marks every outer face Far (adiabatic) except those for which `keep(centroid)` holds.
+pub fn only_faces(mesh: &mut Mesh, keep: impl Fn([f64; 3]) -> bool) {
+    let mut count = std::collections::HashMap::new();
+    for conn in &mesh.elements {
+        for f in FACES {
+            let mut key: Vec<u32> = f
+                .iter()
+                .map(|&k| mesh.thermal_dof[conn[k] as usize])
+                .collect();
+            key.sort_unstable();
+            *count.entry(key).or_insert(0) += 1;
+        }
+    }
+    let mut surfaces = Vec::new();
+    for (e, conn) in mesh.elements.iter().enumerate() {
+        for (fi, f) in FACES.iter().enumerate() {
+            let mut key: Vec<u32> = f
+                .iter()
+                .map(|&k| mesh.thermal_dof[conn[k] as usize])
+                .collect();
+            key.sort_unstable();
+            if count[&key] != 1 {
+                continue;
+            }
+            let mut c = [0.0; 3];
+            for &k in f {
+                for d in 0..3 {
+                    c[d] += 0.25 * mesh.nodes[conn[k] as usize][d];
+                }
+            }
+            let kind = if keep(c) {
+                SurfaceKind::Ground
+            } else {
+                SurfaceKind::Far
+            };
+            surfaces.push(SurfaceFace {
+                elem: e as u32,
+                face: fi as u8,
+                kind,
+            });
+        }
+    }
+    mesh.surfaces = surfaces;
+}
+
+/// Least-squares slope of log(err) against log(h).
+pub fn fitted_slope(h: &[f64], err: &[f64]) -> f64 {
+    let x: Vec<f64> = h.iter().map(|v| v.ln()).collect();
+    let y: Vec<f64> = err.iter().map(|v| v.ln()).collect();
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}

@@ -1,0 +1,597 @@
+//! Sparse assembly, Dirichlet elimination and the faer Cholesky wrapper of
+//! `groutready::fem`, checked against dense nalgebra computations.
+
+#![allow(clippy::needless_range_loop)]
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use faer::Mat;
+use groutready::fem::{
+    capacity_consistent, capacity_lumped, conductivity, face_convection, hex8, nested_dissection,
+    relative_residual, volume_load, CholeskySolver, Ordering, Pattern, PatternError, SolveError,
+    SparseSym, NO_DOF,
+};
+use nalgebra::{DMatrix, DVector, SMatrix};
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+/// Structured hex grid of nx×ny×nz elements (spacing h), interior nodes
+/// jittered by `jitter`·h, node → dof through a shuffled numbering.
+struct Grid {
+    coords: Vec<[f64; 3]>,
+    elems: Vec<[u32; 8]>,
+    /// (element, local face) on the bottom (z = 0) and top boundaries
+    bottom: Vec<(usize, usize)>,
+    top: Vec<(usize, usize)>,
+    dof: Vec<u32>,
+}
+
+fn grid(n: [usize; 3], h: f64, jitter: f64, shuffle: bool, rng: &mut Rng) -> Grid {
+    let [nx, ny, nz] = n;
+    let id = |i: usize, j: usize, k: usize| (i + (nx + 1) * (j + (ny + 1) * k)) as u32;
+    let mut coords = Vec::new();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let mut x = [i as f64 * h, j as f64 * h, k as f64 * h];
+                let interior = [(i, nx), (j, ny), (k, nz)]
+                    .iter()
+                    .all(|&(a, m)| a > 0 && a < m);
+                if interior && jitter > 0.0 {
+                    for v in x.iter_mut() {
+                        *v += rng.range(-jitter, jitter) * h;
+                    }
+                }
+                coords.push(x);
+            }
+        }
+    }
+    let mut elems = Vec::new();
+    let (mut bottom, mut top) = (Vec::new(), Vec::new());
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                if k == 0 {
+                    bottom.push((elems.len(), 0));
+                }
+                if k == nz - 1 {
+                    top.push((elems.len(), 1));
+                }
+                elems.push([
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ]);
+            }
+        }
+    }
+    let mut dof: Vec<u32> = (0..coords.len() as u32).collect();
+    if shuffle {
+        for a in (1..dof.len()).rev() {
+            let b = (rng.next() * (a + 1) as f64) as usize;
+            dof.swap(a, b.min(a));
+        }
+    }
+    Grid {
+        coords,
+        elems,
+        bottom,
+        top,
+        dof,
+    }
+}
+
+impl Grid {
+    fn hex(&self, e: usize) -> [[f64; 3]; 8] {
+        self.elems[e].map(|v| self.coords[v as usize])
+    }
+    fn hex_dofs(&self, e: usize) -> Vec<u32> {
+        self.elems[e]
+            .iter()
+            .map(|&v| self.dof[v as usize])
+            .collect()
+    }
+    fn face_dofs(&self, (e, f): (usize, usize)) -> Vec<u32> {
+        hex8::FACES[f]
+            .iter()
+            .map(|&a| self.dof[self.elems[e][a] as usize])
+            .collect()
+    }
+    fn n_dofs(&self) -> usize {
+        self.coords.len()
+    }
+}
+
+fn add_dense(m: &mut DMatrix<f64>, dofs: &[u32], k: &DMatrix<f64>, alpha: f64) {
+    for (a, &da) in dofs.iter().enumerate() {
+        for (b, &db) in dofs.iter().enumerate() {
+            if da != NO_DOF && db != NO_DOF {
+                m[(da as usize, db as usize)] += alpha * k[(a, b)];
+            }
+        }
+    }
+}
+
+fn to_dmatrix<const N: usize>(k: &SMatrix<f64, N, N>) -> DMatrix<f64> {
+    DMatrix::from_fn(N, N, |i, j| k[(i, j)])
+}
+
+/// Thermal step matrix (ρc/dt)·C + K + H on hexes and top faces, both sparse
+/// and dense, plus the slot lists.
+fn assemble_both(g: &Grid, dt: f64, consistent: bool) -> (SparseSym, DMatrix<f64>) {
+    let (lambda, rho_c, beta) = (2.0 * 86400.0, 2.3e6, 10.0 * 86400.0);
+    let mut slots: Vec<Vec<u32>> = (0..g.elems.len()).map(|e| g.hex_dofs(e)).collect();
+    slots.extend(g.top.iter().map(|&f| g.face_dofs(f)));
+    let pattern = Arc::new(Pattern::new(g.n_dofs(), &slots));
+    let mut a = SparseSym::new(pattern);
+    let mut d = DMatrix::zeros(g.n_dofs(), g.n_dofs());
+    for e in 0..g.elems.len() {
+        let c = g.hex(e);
+        let k = conductivity(&c, lambda).unwrap();
+        a.add_element(e, &k);
+        add_dense(&mut d, &slots[e], &to_dmatrix(&k), 1.0);
+        if consistent {
+            let m = capacity_consistent(&c, rho_c).unwrap();
+            a.add_element_scaled(e, 1.0 / dt, &m);
+            add_dense(&mut d, &slots[e], &to_dmatrix(&m), 1.0 / dt);
+        } else {
+            let m = capacity_lumped(&c, rho_c).unwrap();
+            a.add_element_diag(e, 1.0 / dt, &m);
+            add_dense(
+                &mut d,
+                &slots[e],
+                &DMatrix::from_diagonal(&DVector::from_row_slice(&m)),
+                1.0 / dt,
+            );
+        }
+    }
+    for (s, &(e, f)) in g.top.iter().enumerate() {
+        let slot = g.elems.len() + s;
+        let (h, _) = face_convection(&hex8::face_coords(&g.hex(e), f), beta).unwrap();
+        a.add_element(slot, &h);
+        add_dense(&mut d, &slots[slot], &to_dmatrix(&h), 1.0);
+    }
+    (a, d)
+}
+
+fn max_abs_diff(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).amax()
+}
+
+#[test]
+fn pattern_is_upper_sorted_and_scatter_maps_hit_the_right_entries() {
+    let mut rng = Rng(3);
+    let g = grid([3, 2, 2], 1.0, 0.2, true, &mut rng);
+    let mut slots: Vec<Vec<u32>> = (0..g.elems.len()).map(|e| g.hex_dofs(e)).collect();
+    slots.extend(g.bottom.iter().map(|&f| g.face_dofs(f)));
+    let p = Pattern::new(g.n_dofs(), &slots);
+    assert_eq!(p.n_dofs(), g.n_dofs());
+    assert_eq!(p.n_elements(), slots.len());
+    for j in 0..p.n_dofs() {
+        let rows = &p.row_idx()[p.col_ptr()[j] as usize..p.col_ptr()[j + 1] as usize];
+        assert!(
+            rows.windows(2).all(|w| w[0] < w[1]),
+            "column {j} not sorted"
+        );
+        assert_eq!(*rows.last().unwrap() as usize, j, "diagonal last");
+        assert_eq!(p.diag_index()[j] as usize, p.col_ptr()[j + 1] as usize - 1);
+    }
+    // a structured hex grid couples exactly the nodes of shared elements:
+    // nnz(upper) = (Σ_node #neighbours incl. itself + n) / 2
+    let mut dense = DMatrix::<u8>::zeros(p.n_dofs(), p.n_dofs());
+    for s in &slots {
+        for &a in s {
+            for &b in s {
+                dense[(a as usize, b as usize)] = 1;
+            }
+        }
+    }
+    let full: usize = dense.iter().map(|&v| v as usize).sum();
+    assert_eq!(p.nnz(), (full + p.n_dofs()) / 2);
+    for (slot, dofs) in slots.iter().enumerate() {
+        let sc = p.scatter_index(slot);
+        let ne = dofs.len();
+        assert_eq!(sc.len(), ne * (ne + 1) / 2);
+        assert_eq!(p.element_dofs(slot), &dofs[..]);
+        let mut idx = 0;
+        for a in 0..ne {
+            for b in a..ne {
+                let want = p.find(dofs[a] as usize, dofs[b] as usize).unwrap();
+                assert_eq!(sc[idx] as usize, want);
+                assert_eq!(groutready::fem::sparse::packed_upper_index(ne, a, b), idx);
+                idx += 1;
+            }
+        }
+    }
+}
+
+#[test]
+fn sparse_assembly_equals_dense_assembly() {
+    let mut rng = Rng(5);
+    let g = grid([3, 3, 2], 0.8, 0.25, true, &mut rng);
+    for consistent in [true, false] {
+        let (a, d) = assemble_both(&g, 0.5, consistent);
+        let scale = d.amax();
+        assert!(max_abs_diff(&a.to_dense(), &d) <= 1e-13 * scale);
+        let x = DVector::from_fn(g.n_dofs(), |i, _| (i as f64 * 0.37).sin());
+        let mut y = vec![0.0; g.n_dofs()];
+        a.mul_vec(x.as_slice(), &mut y);
+        let yd = &d * &x;
+        for i in 0..g.n_dofs() {
+            assert!((y[i] - yd[i]).abs() <= 1e-12 * scale);
+        }
+        let diag = a.diag();
+        for i in 0..g.n_dofs() {
+            assert_eq!(diag[i], a.get(i, i));
+            assert!((diag[i] - d[(i, i)]).abs() <= 1e-13 * scale);
+        }
+        // set_zero keeps the pattern, re-assembly reproduces the values
+        let mut b = a.clone();
+        b.set_zero();
+        assert!(b.values().iter().all(|&v| v == 0.0));
+        b.axpy(2.0, &a);
+        assert!(max_abs_diff(&b.to_dense(), &(&d * 2.0)) <= 2e-13 * scale);
+    }
+}
+
+#[test]
+fn repeated_and_missing_dofs_assemble_like_dense() {
+    // element 0 repeats dof 1 (a joint pair sharing a thermal dof),
+    // element 1 has a node outside the system, dof 6 is touched by no element
+    let slots: Vec<Vec<u32>> = vec![vec![0, 1, 1, 2], vec![3, NO_DOF, 4, 0], vec![2, 5, 4, 3]];
+    let p = Arc::new(Pattern::new(7, &slots));
+    let mut a = SparseSym::new(p.clone());
+    let mut d = DMatrix::zeros(7, 7);
+    let mut rng = Rng(9);
+    for (s, dofs) in slots.iter().enumerate() {
+        let r = DMatrix::from_fn(4, 4, |_, _| rng.range(-1.0, 1.0));
+        let k = &r * r.transpose();
+        a.add_element(s, &k);
+        add_dense(&mut d, dofs, &k, 1.0);
+    }
+    assert!(max_abs_diff(&a.to_dense(), &d) < 1e-15);
+    assert_eq!(p.find(6, 6), Some(p.diag_index()[6] as usize));
+    assert_eq!(p.find(0, 6), None);
+    assert_eq!(a.get(6, 6), 0.0);
+}
+
+#[test]
+fn pattern_rejects_out_of_range_dofs() {
+    let slots = [[0u32, 1, 5]];
+    assert_eq!(
+        Pattern::try_new(5, &slots).unwrap_err(),
+        PatternError::DofOutOfRange {
+            slot: 0,
+            dof: 5,
+            n_dofs: 5
+        }
+    );
+}
+
+#[test]
+fn dirichlet_elimination_equals_dense_reduced_solution() {
+    let mut rng = Rng(11);
+    let g = grid([4, 3, 3], 1.5, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let (mut a, d) = assemble_both(&g, 2.0, true);
+    // bottom face held at a prescribed field, a source in the volume, top convection to Ta
+    let mut fixed = vec![false; n];
+    let mut u = vec![0.0; n];
+    for &(e, f) in &g.bottom {
+        for &ln in &hex8::FACES[f] {
+            let node = g.elems[e][ln] as usize;
+            let dof = g.dof[node] as usize;
+            fixed[dof] = true;
+            u[dof] = 12.0 + 0.3 * g.coords[node][0] - 0.2 * g.coords[node][1];
+        }
+    }
+    let mut rhs = vec![0.0; n];
+    for e in 0..g.elems.len() {
+        let q = volume_load(&g.hex(e), 2.3e6 * 0.8).unwrap();
+        for (a_, &dof) in g.hex_dofs(e).iter().enumerate() {
+            rhs[dof as usize] += q[a_];
+        }
+    }
+    for &(e, f) in &g.top {
+        let (_, h) = face_convection(&hex8::face_coords(&g.hex(e), f), 10.0 * 86400.0).unwrap();
+        for (a_, &dof) in g.face_dofs((e, f)).iter().enumerate() {
+            rhs[dof as usize] += 5.0 * h[a_];
+        }
+    }
+    let rhs_orig = rhs.clone();
+    a.apply_dirichlet_with_rhs(&fixed, &u, &mut rhs);
+    // the eliminated matrix: fixed rows/cols are unit vectors
+    let ad = a.to_dense();
+    for i in 0..n {
+        for j in 0..n {
+            if fixed[i] || fixed[j] {
+                assert_eq!(ad[(i, j)], if i == j { 1.0 } else { 0.0 });
+            }
+        }
+    }
+    let mut solver = CholeskySolver::new(a.pattern().clone()).unwrap();
+    solver.factorize(&a).unwrap();
+    let mut x = rhs.clone();
+    solver.solve_in_place(&mut x).unwrap();
+    assert!(relative_residual(&a, &x, &rhs) < 1e-12);
+    // dense reduced system K_ff x_f = f_f − K_fc u_c
+    let free: Vec<usize> = (0..n).filter(|&i| !fixed[i]).collect();
+    let fix: Vec<usize> = (0..n).filter(|&i| fixed[i]).collect();
+    let kff = DMatrix::from_fn(free.len(), free.len(), |i, j| d[(free[i], free[j])]);
+    let kfc = DMatrix::from_fn(free.len(), fix.len(), |i, j| d[(free[i], fix[j])]);
+    let uc = DVector::from_fn(fix.len(), |i, _| u[fix[i]]);
+    let ff = DVector::from_fn(free.len(), |i, _| rhs_orig[free[i]]);
+    let xf = kff.cholesky().unwrap().solve(&(ff - kfc * uc));
+    for (k, &i) in free.iter().enumerate() {
+        assert!(
+            (x[i] - xf[k]).abs() <= 1e-11 * xf.amax(),
+            "dof {i}: {} vs {}",
+            x[i],
+            xf[k]
+        );
+    }
+    for &i in &fix {
+        assert_eq!(x[i], u[i]);
+    }
+    // and the full (unmodified) system is satisfied on the free rows
+    let xv = DVector::from_row_slice(&x);
+    let r = &d * &xv;
+    for &i in &free {
+        assert!((r[i] - rhs_orig[i]).abs() <= 1e-10 * DVector::from_row_slice(&rhs_orig).amax());
+    }
+}
+
+#[test]
+fn cholesky_solves_assembled_spd_system_single_and_multi_rhs() {
+    let mut rng = Rng(13);
+    let g = grid([6, 5, 4], 1.0, 0.25, true, &mut rng);
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(&g, 1.0, true);
+    let mut solver = CholeskySolver::new(a.pattern().clone()).unwrap();
+    assert!(!solver.is_factorized());
+    assert_eq!(
+        solver.solve_in_place(&mut vec![1.0; n]),
+        Err(SolveError::NotFactorized)
+    );
+    solver.factorize(&a).unwrap();
+    assert!(solver.factor_nnz() >= a.pattern().nnz());
+    let mut b = Mat::<f64>::zeros(n, 3);
+    for j in 0..3 {
+        for i in 0..n {
+            b[(i, j)] = rng.range(-1.0, 1.0) * 1e5;
+        }
+    }
+    let mut x = b.clone();
+    solver.solve_columns(&mut x).unwrap();
+    for j in 0..3 {
+        let bj: Vec<f64> = (0..n).map(|i| b[(i, j)]).collect();
+        let xj: Vec<f64> = (0..n).map(|i| x[(i, j)]).collect();
+        let res = relative_residual(&a, &xj, &bj);
+        assert!(res < 1e-12, "column {j}: residual {res:e}");
+        let mut single = bj.clone();
+        solver.solve_in_place(&mut single).unwrap();
+        for i in 0..n {
+            assert!(
+                (single[i] - xj[i]).abs() <= 1e-14 * xj.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+            );
+        }
+    }
+    let s = solver.stats();
+    assert_eq!(
+        (s.n_symbolic, s.n_numeric, s.n_solves, s.n_rhs),
+        (1, 1, 4, 6)
+    );
+}
+
+#[test]
+fn symbolic_factorization_is_reused_across_numeric_matrices() {
+    let mut rng = Rng(17);
+    let g = grid([5, 4, 4], 1.0, 0.2, false, &mut rng);
+    let n = g.n_dofs();
+    let (a1, _) = assemble_both(&g, 0.25, true);
+    // a second matrix on the same pattern, built from a separately constructed
+    // (structurally equal) pattern, with other values
+    let (mut a2, _) = assemble_both(&g, 5.0, false);
+    for v in a2.values_mut() {
+        *v *= 3.0;
+    }
+    let mut solver = CholeskySolver::new(a1.pattern().clone()).unwrap();
+    let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+    for a in [&a1, &a2] {
+        solver.factorize(a).unwrap();
+        let mut x = b.clone();
+        solver.solve_in_place(&mut x).unwrap();
+        let res = relative_residual(a, &x, &b);
+        assert!(res < 1e-12, "residual {res:e}");
+    }
+    let s = solver.stats();
+    assert_eq!((s.n_symbolic, s.n_numeric, s.n_solves), (1, 2, 2));
+    assert!(s.symbolic_seconds >= 0.0 && s.numeric_seconds > 0.0 && s.solve_seconds > 0.0);
+}
+
+#[test]
+fn solver_reports_errors_instead_of_nan() {
+    let slots = vec![vec![0u32, 1, 2, 3], vec![2, 3, 4, 5]];
+    let p = Arc::new(Pattern::new(7, &slots));
+    let mut a = SparseSym::new(p.clone());
+    let k = DMatrix::from_fn(4, 4, |i, j| if i == j { 4.0 } else { -1.0 });
+    a.add_element(0, &k);
+    a.add_element(1, &k);
+    a.add_diag(6, -2.0); // an isolated dof with a negative pivot
+    let mut solver = CholeskySolver::new(p.clone()).unwrap();
+    match solver.factorize(&a) {
+        Err(SolveError::NotPositiveDefinite { dof, .. }) => assert_eq!(dof, 6),
+        other => panic!("expected NotPositiveDefinite, got {other:?}"),
+    }
+    assert!(!solver.is_factorized());
+    a.add_diag(6, 3.0);
+    solver.factorize(&a).unwrap();
+    let mut b = vec![1.0; 7];
+    b[3] = f64::NAN;
+    assert_eq!(
+        solver.solve_in_place(&mut b),
+        Err(SolveError::NonFinite {
+            what: "right-hand side",
+            index: 3
+        })
+    );
+    assert!(matches!(
+        solver.solve_in_place(&mut [1.0; 3]),
+        Err(SolveError::DimensionMismatch {
+            expected: 7,
+            got: 3
+        })
+    ));
+    let mut bad = a.clone();
+    bad.values_mut()[0] = f64::INFINITY;
+    assert!(matches!(
+        solver.factorize(&bad),
+        Err(SolveError::NonFinite { what: "matrix", .. })
+    ));
+    let other = Arc::new(Pattern::new(7, &[vec![0u32, 6]]));
+    let mut c = SparseSym::new(other);
+    for i in 0..7 {
+        c.add_diag(i, 1.0);
+    }
+    assert_eq!(solver.factorize(&c), Err(SolveError::PatternMismatch));
+}
+
+#[test]
+fn nested_dissection_is_a_permutation_and_gives_the_same_solution() {
+    let mut rng = Rng(23);
+    let g = grid([7, 6, 5], 1.0, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(&g, 1.0, false);
+    let mut dof_coords = vec![[0.0; 3]; n];
+    for (node, &d) in g.dof.iter().enumerate() {
+        dof_coords[d as usize] = g.coords[node];
+    }
+    let nd = nested_dissection(a.pattern(), &dof_coords, 8);
+    let mut seen = vec![false; n];
+    for &d in &nd {
+        assert!(!seen[d as usize]);
+        seen[d as usize] = true;
+    }
+    assert_eq!(nd.len(), n);
+    let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+    let mut xs = Vec::new();
+    for ordering in [Ordering::Amd, Ordering::Custom(nd.clone())] {
+        let mut solver =
+            CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
+        solver.factorize(&a).unwrap();
+        let mut x = b.clone();
+        solver.solve_in_place(&mut x).unwrap();
+        assert!(relative_residual(&a, &x, &b) < 1e-12);
+        xs.push(x);
+    }
+    let scale = xs[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(xs[0]
+        .iter()
+        .zip(&xs[1])
+        .all(|(p, q)| (p - q).abs() <= 1e-12 * scale));
+    let mut not_perm = nd.clone();
+    not_perm[0] = not_perm[1];
+    assert!(matches!(
+        CholeskySolver::with_options(
+            a.pattern().clone(),
+            &Ordering::Custom(not_perm),
+            faer::Par::Seq
+        ),
+        Err(SolveError::InvalidOrdering { .. })
+    ));
+}
+
+/// Timing of pattern, assembly, symbolic and numeric Cholesky and one solve
+/// on structured scalar hex grids (25³ and 50³ elements), with faer's AMD and
+/// with geometric nested dissection. Run with
+/// `cargo test --release --test fem_sparse -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn bench_cholesky_structured_grids() {
+    let mut rng = Rng(19);
+    for m in [25usize, 50] {
+        let t = Instant::now();
+        let g = grid([m, m, m], 1.0, 0.0, false, &mut rng);
+        let slots: Vec<[u32; 8]> = (0..g.elems.len())
+            .map(|e| {
+                let d = g.hex_dofs(e);
+                [d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7]]
+            })
+            .collect();
+        let t_mesh = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let pattern = Arc::new(Pattern::new(g.n_dofs(), &slots));
+        let t_pattern = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut a = SparseSym::new(pattern.clone());
+        let (lambda, rho_c, dt) = (2.0 * 86400.0, 2.3e6, 1.0);
+        for e in 0..g.elems.len() {
+            let c = g.hex(e);
+            a.add_element(e, &conductivity(&c, lambda).unwrap());
+            a.add_element_diag(e, 1.0 / dt, &capacity_lumped(&c, rho_c).unwrap());
+        }
+        let t_assembly = t.elapsed().as_secs_f64();
+        println!(
+            "grid {m}^3 elements: n = {}, nnz(upper) = {}, mesh {:.3}s, pattern {:.3}s, assembly {:.3}s",
+            g.n_dofs(),
+            pattern.nnz(),
+            t_mesh,
+            t_pattern,
+            t_assembly
+        );
+        let mut dof_coords = vec![[0.0; 3]; g.n_dofs()];
+        for (node, &d) in g.dof.iter().enumerate() {
+            dof_coords[d as usize] = g.coords[node];
+        }
+        let t = Instant::now();
+        let nd = nested_dissection(&pattern, &dof_coords, 64);
+        let t_nd = t.elapsed().as_secs_f64();
+        for (name, ordering) in [
+            ("amd", Ordering::Amd),
+            ("nested dissection", Ordering::Custom(nd.clone())),
+        ] {
+            let mut solver =
+                CholeskySolver::with_options(pattern.clone(), &ordering, faer::Par::rayon(0))
+                    .unwrap();
+            solver.factorize(&a).unwrap();
+            let t_numeric1 = solver.stats().numeric_seconds;
+            let mut x: Vec<f64> = (0..g.n_dofs()).map(|i| (i % 17) as f64).collect();
+            let b = x.clone();
+            solver.solve_in_place(&mut x).unwrap();
+            let res = relative_residual(&a, &x, &b);
+            // second numeric factorisation on the same symbolic analysis
+            solver.factorize(&a).unwrap();
+            let s = solver.stats();
+            println!(
+                "  {name:>17}: nnz(L) = {} ({}), ordering {:.3}s, symbolic {:.3}s, numeric {:.3}s (2nd {:.3}s), \
+                 solve {:.4}s, residual {:.1e}",
+                solver.factor_nnz(),
+                if solver.is_supernodal() { "supernodal" } else { "simplicial" },
+                if name == "amd" { 0.0 } else { t_nd },
+                s.symbolic_seconds,
+                t_numeric1,
+                s.numeric_seconds - t_numeric1,
+                s.solve_seconds,
+                res
+            );
+            assert!(res < 1e-10);
+        }
+    }
+}

@@ -1,0 +1,456 @@
+//! Thermal engine against closed forms (DESIGN.md §7).
+
+mod common;
+
+use common::*;
+use groutready::material::{hydration_under_cooling, AdiabaticRise, ZhuPipe};
+use groutready::scene::{Air, Effect};
+use groutready::schedule::{CoolingStage, Pour, Schedules, Stage};
+use groutready::sim::Simulation;
+use groutready::thermal::boundary::AirTemperature;
+use groutready::thermal::cooling::{PlannedStage, StageStatus};
+use groutready::thermal::ThermalModel;
+
+const PIPES: &str = r#"
+[pipes]
+spacing_horizontal_m = 1.5
+spacing_vertical_m = 1.5
+length_m = 250.0
+flow_l_per_min = 18.0
+outer_radius_m = 0.016
+inner_radius_m = 0.014
+wall_conductivity_w_mk = 1.66
+"#;
+
+fn rise_forms() -> Vec<AdiabaticRise> {
+    vec![
+        AdiabaticRise::Exponential {
+            theta0: 25.0,
+            m: 0.35,
+        },
+        AdiabaticRise::Compound {
+            theta0: 24.0,
+            a: 0.42,
+            b: 0.68,
+        },
+        AdiabaticRise::Hyperbolic {
+            theta0: 26.0,
+            n: 2.4,
+        },
+    ]
+}
+
+/// Steps of growing and shrinking length, as the driver makes them.
+fn steps_to(end: f64) -> Vec<(f64, f64)> {
+    let mut out = vec![];
+    let (mut t, mut dt) = (0.0, 0.125);
+    while t < end {
+        let t1 = (t + dt).min(end);
+        out.push((t, t1));
+        t = t1;
+        dt = if dt < 4.0 { dt * 2.0 } else { 0.5 };
+    }
+    out
+}
+
+#[test]
+fn insulated_block_follows_each_adiabatic_curve() {
+    for rise in rise_forms() {
+        let mut sc = scene("\"hydration\"", &blocks_geometry(1, 6.0, 4.0, 1, 2, 2), "");
+        sc.concrete.adiabatic = Some(rise.clone());
+        let mesh = blocks_mesh(&sc);
+        let mut th = ThermalModel::new(&mesh, &sc, vec![], None, None).unwrap();
+        th.pour(1, 1, 0.0, 14.0);
+        for (t0, t1) in steps_to(90.0) {
+            th.step(t0, t1).unwrap();
+            let exact = 14.0 + rise.theta(t1);
+            for &d in &mesh.thermal_dof {
+                let got = th.state.temperature[d as usize];
+                let rel = (got - exact).abs() / rise.theta(t1);
+                assert!(
+                    rel <= 1e-8,
+                    "{rise:?} day {t1}: {got} vs {exact} (rel {rel:.2e})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
+    let extra = PIPES;
+    let mut sc = scene(
+        "\"hydration\", \"pipe_cooling\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
+        extra,
+    );
+    let rise = AdiabaticRise::Exponential {
+        theta0: 25.0,
+        m: 0.35,
+    };
+    sc.concrete.adiabatic = Some(rise.clone());
+    let mesh = blocks_mesh(&sc);
+    let stages = vec![
+        PlannedStage {
+            block: 1,
+            lift_from: 1,
+            lift_to: 1,
+            start_day: 0.0,
+            end_day: Some(15.0),
+            water_temp_c: 10.0,
+            target_temp_c: None,
+            line: 2,
+        },
+        PlannedStage {
+            block: 1,
+            lift_from: 1,
+            lift_to: 1,
+            start_day: 15.0,
+            end_day: Some(60.0),
+            water_temp_c: 8.0,
+            target_temp_c: None,
+            line: 3,
+        },
+    ];
+    let pipe = ZhuPipe::new(
+        sc.pipes.as_ref().unwrap(),
+        sc.concrete_diffusivity_m2_per_day(),
+        sc.concrete.conductivity_w_mk,
+    );
+    let mut th = ThermalModel::new(&mesh, &sc, stages, None, None).unwrap();
+    let t_place = 16.0;
+    th.pour(1, 1, 0.0, t_place);
+    th.update_stages(0.0);
+    let stage1 = |t: f64| {
+        10.0 + (t_place - 10.0) * pipe.phi(t) + hydration_under_cooling(&pipe, &rise, 0.0, t)
+    };
+    let t0_second = stage1(15.0);
+    let stage2 = |t: f64| {
+        8.0 + (t0_second - 8.0) * pipe.phi(t - 15.0)
+            + hydration_under_cooling(&pipe, &rise, 15.0, t - 15.0)
+    };
+    let mut t = 0.0;
+    let mut max_rel: f64 = 0.0;
+    while t < 60.0 {
+        let t1 = if t < 2.0 { t + 0.25 } else { t + 1.0 };
+        th.step(t, t1).unwrap();
+        th.update_stages(t1);
+        let exact = if t1 <= 15.0 { stage1(t1) } else { stage2(t1) };
+        let got = th.lift_mean(1, 1).unwrap();
+        max_rel = max_rel.max((got - exact).abs() / exact.abs());
+        t = t1;
+    }
+    eprintln!(
+        "zhu: max relative error {max_rel:.2e}, T(60) = {}",
+        stage2(60.0)
+    );
+    assert!(max_rel <= 1e-6, "max relative error {max_rel:.2e}");
+    // Pipes really cooled: without them the block would be at 16 + 25 °C.
+    assert!(stage2(60.0) < 25.0, "{}", stage2(60.0));
+    assert!(matches!(
+        th.state.status[1],
+        StageStatus::Done {
+            reached_target: false,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn a_stage_ends_when_its_target_is_reached() {
+    let mut sc = scene(
+        "\"hydration\", \"pipe_cooling\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 1, 1),
+        PIPES,
+    );
+    let rise = AdiabaticRise::Exponential {
+        theta0: 25.0,
+        m: 0.35,
+    };
+    sc.concrete.adiabatic = Some(rise.clone());
+    let mesh = blocks_mesh(&sc);
+    let stage = PlannedStage {
+        block: 1,
+        lift_from: 1,
+        lift_to: 1,
+        start_day: 20.0,
+        end_day: None,
+        water_temp_c: 8.0,
+        target_temp_c: Some(30.0),
+        line: 2,
+    };
+    let mut th = ThermalModel::new(&mesh, &sc, vec![stage], None, None).unwrap();
+    th.pour(1, 1, 0.0, 15.0);
+    let mut t = 0.0;
+    let mut ended = None;
+    while t < 120.0 {
+        th.update_stages(t);
+        th.step(t, t + 1.0).unwrap();
+        t += 1.0;
+        if ended.is_none() {
+            if let StageStatus::Done {
+                end_day,
+                reached_target,
+            } = th.state.status[0]
+            {
+                assert!(reached_target);
+                ended = Some((end_day, th.lift_mean(1, 1).unwrap()));
+            }
+        }
+    }
+    let (end_day, t_end) = ended.expect("stage reached its target");
+    assert!(t_end <= 30.0 && t_end > 29.0, "mean at the end {t_end}");
+    // After the stage the insulated block follows the remaining adiabatic rise.
+    let exact = t_end + rise.theta(120.0) - rise.theta(end_day);
+    assert!((th.lift_mean(1, 1).unwrap() - exact).abs() < 1e-9);
+}
+
+/// Centre temperature θ* of a slab −L..L, convection Bi on both faces, θ*(x,0) = 1.
+fn slab_series(bi: f64, fo: f64) -> f64 {
+    let mut sum = 0.0;
+    for n in 0..200 {
+        let (mut lo, mut hi) = (
+            n as f64 * std::f64::consts::PI,
+            n as f64 * std::f64::consts::PI + 1.5707963267948966,
+        );
+        hi -= 1e-15;
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid * mid.tan() - bi > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let z = 0.5 * (lo + hi);
+        let c = 4.0 * z.sin() / (2.0 * z + (2.0 * z).sin());
+        sum += c * (-z * z * fo).exp();
+    }
+    sum
+}
+
+/// FE centre temperature of the Bi = 1 slab at the given Fourier numbers.
+fn slab_fe(n_elem: u32, dt_fo: f64, theta: f64, fos: &[f64]) -> Vec<f64> {
+    let lambda = 2.2;
+    let extra = format!(
+        "[air]\nmean_c = 0.0\namplitude_c = 0.0\nwarmest_day_of_year = 200.0\nfilm_w_m2k = {lambda}\n\
+         [time]\ntheta = {theta}\n"
+    );
+    let sc = scene(
+        "\"ambient\"",
+        &blocks_geometry(1, 2.0, 1.0, 1, n_elem, 1),
+        &extra,
+    );
+    let mut mesh = blocks_mesh(&sc);
+    let xs: Vec<f64> = mesh.nodes.iter().map(|p| p[0]).collect();
+    let (xmin, xmax) = (
+        xs.iter().cloned().fold(f64::MAX, f64::min),
+        xs.iter().cloned().fold(f64::MIN, f64::max),
+    );
+    only_faces(&mut mesh, |c| {
+        (c[0] - xmin).abs() < 1e-9 || (c[0] - xmax).abs() < 1e-9
+    });
+    let centre_node = (0..mesh.nodes.len())
+        .find(|&i| (mesh.nodes[i][0] - 0.5 * (xmin + xmax)).abs() < 1e-9)
+        .unwrap();
+    let a = sc.concrete_diffusivity_m2_per_day(); // L = 1 m so Fo = a t
+    let air = AirTemperature::new(sc.epoch, sc.air.clone().unwrap(), None);
+    let mut th = ThermalModel::new(&mesh, &sc, vec![], Some(air), None).unwrap();
+    th.pour(1, 1, 0.0, 1.0);
+    let mut out = vec![];
+    let mut fo = 0.0;
+    for &target in fos {
+        let n = ((target - fo) / dt_fo).round() as usize;
+        for _ in 0..n {
+            th.step(fo / a, (fo + dt_fo) / a).unwrap();
+            fo += dt_fo;
+        }
+        out.push(th.state.temperature[mesh.thermal_dof[centre_node] as usize]);
+    }
+    out
+}
+
+#[test]
+fn slab_series_reference_values() {
+    for (fo, expected) in [(0.2, 0.95064), (0.5, 0.77253), (1.0, 0.53386)] {
+        assert!((slab_series(1.0, fo) - expected).abs() < 5e-6, "Fo {fo}");
+    }
+}
+
+#[test]
+fn slab_with_convection_matches_series_and_converges_in_space() {
+    let fos = [0.2, 0.5, 1.0];
+    let exact: Vec<f64> = fos.iter().map(|&f| slab_series(1.0, f)).collect();
+    let ns = [4u32, 8, 16, 32];
+    let mut errs = vec![];
+    for &n in &ns {
+        let fe = slab_fe(n, 1e-3, 0.5, &fos);
+        let e = fe
+            .iter()
+            .zip(&exact)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        errs.push(e);
+    }
+    let hs: Vec<f64> = ns.iter().map(|&n| 2.0 / n as f64).collect();
+    let slope = fitted_slope(&hs, &errs);
+    eprintln!("slab space: h {hs:?} errors {errs:?} slope {slope:.3}");
+    assert!(
+        (slope - 2.0).abs() < 0.15,
+        "spatial rate {slope:.3}, errors {errs:?}"
+    );
+    assert!(errs[3] < 2e-4, "finest error {}", errs[3]);
+}
+
+#[test]
+fn slab_converges_first_order_backward_euler_second_order_crank_nicolson() {
+    let fos = [0.5];
+    let exact = slab_series(1.0, 0.5);
+    let dts = [0.05, 0.025, 0.0125, 0.00625];
+    for (theta, rate) in [(1.0, 1.0), (0.5, 2.0)] {
+        // The spatial error is removed by comparing with the same mesh at a tiny step.
+        let fine = slab_fe(32, 1e-4, 0.5, &fos)[0];
+        let errs: Vec<f64> = dts
+            .iter()
+            .map(|&dt| (slab_fe(32, dt, theta, &fos)[0] - fine).abs())
+            .collect();
+        let slope = fitted_slope(&dts, &errs);
+        eprintln!("slab time θ={theta}: dt {dts:?} errors {errs:?} slope {slope:.3}");
+        assert!(
+            (slope - rate).abs() < 0.15,
+            "θ = {theta}: rate {slope:.3}, errors {errs:?}"
+        );
+        let _ = exact;
+    }
+}
+
+fn staged_schedules() -> Schedules {
+    let mut pours = vec![];
+    for block in 1..=2u32 {
+        for lift in 1..=4u32 {
+            pours.push(Pour {
+                block,
+                lift,
+                date: date(2024, 3, 1)
+                    + chrono::Duration::days((lift as i64 - 1) * 6 + block as i64 - 1),
+                placement_temp_c: 12.0 + lift as f64,
+                line: pours.len() + 2,
+            });
+        }
+    }
+    let cooling = vec![CoolingStage {
+        block: 1,
+        lift_from: 1,
+        lift_to: 2,
+        stage: Stage::First,
+        start: date(2024, 3, 8),
+        end: Some(date(2024, 3, 30)),
+        water_temp_c: 10.0,
+        target_temp_c: Some(18.0),
+        line: 2,
+    }];
+    Schedules {
+        dir: "memory".into(),
+        pours,
+        cooling,
+        grouting: vec![],
+        weather: None,
+        reservoir: Some(vec![(date(2024, 3, 15), 1.0), (date(2024, 4, 15), 8.0)]),
+        joint_meters: None,
+    }
+}
+
+fn staged_scene(effects: &str) -> groutready::scene::Scene {
+    let extra = format!(
+        "{PIPES}
+[rock]
+density_kg_m3 = 2650.0
+specific_heat_j_kgk = 850.0
+conductivity_w_mk = 2.8
+initial_temp_c = 16.0
+gradient_c_per_m = 0.03
+[air]
+mean_c = 16.0
+amplitude_c = 8.0
+warmest_day_of_year = 200.0
+film_w_m2k = 15.0
+[reservoir]
+surface_mean_c = 17.0
+surface_amplitude_c = 5.0
+warmest_day_of_year = 220.0
+bottom_temp_c = 11.0
+decay_per_m = 0.04
+[time]
+end_date = \"2024-05-30\"
+"
+    );
+    let geometry = blocks_geometry(2, 12.0, 9.0, 4, 2, 3)
+        + "rock_depth_m = 6.0\nrock_layers = 2\nrock_margin_m = 4.0\n";
+    scene(effects, &geometry, &extra)
+}
+
+#[test]
+fn staged_run_balances_heat_to_round_off() {
+    let sc =
+        staged_scene("\"hydration\", \"pipe_cooling\", \"ambient\", \"reservoir_temperature\"");
+    let mesh = blocks_mesh(&sc);
+    let schedules = staged_schedules();
+    let mut sim = Simulation::new(&sc, &mesh, &schedules).unwrap();
+    let stats = sim.run(None, &mut |_, _| {}).unwrap();
+    let th = sim.thermal.as_ref().unwrap();
+    let l = th.state.ledger;
+    let stored = th.stored_heat();
+    let scale = l.births.abs() + l.hydration.abs() + l.pipes.abs() + l.air.abs() + l.water.abs();
+    let imbalance = (stored - l.inflow()).abs() / scale;
+    eprintln!("heat balance: imbalance {imbalance:.2e}, ledger {l:?}, stats {stats:?}");
+    assert!(imbalance < 1e-12, "imbalance {imbalance:.2e}, ledger {l:?}");
+    // Every term took part, so the balance is not trivially met.
+    assert!(
+        l.hydration > 0.0 && l.pipes < 0.0 && l.air != 0.0 && l.water != 0.0,
+        "{l:?}"
+    );
+    let t = stats.thermal.unwrap();
+    assert!(t.pipe_terms > 0 && t.symbolic >= 9, "{t:?}");
+}
+
+#[test]
+fn effects_are_opt_in() {
+    let schedules = staged_schedules();
+    // No thermal effect: no thermal model, nothing assembled or solved.
+    let sc = staged_scene("");
+    let mesh = blocks_mesh(&sc);
+    let mut sim = Simulation::new(&sc, &mesh, &schedules).unwrap();
+    let stats = sim.run(None, &mut |_, _| {}).unwrap();
+    assert!(sim.thermal.is_none() && stats.thermal.is_none());
+    assert!(stats.steps > 0 && stats.pours == 8);
+    // Hydration without pipes: cooling.csv is there but no pipe term is computed.
+    let sc = staged_scene("\"hydration\", \"ambient\"");
+    let mut sim = Simulation::new(&sc, &mesh, &schedules).unwrap();
+    let t = sim.run(None, &mut |_, _| {}).unwrap().thermal.unwrap();
+    assert_eq!(t.pipe_terms, 0);
+    assert!(t.numeric > 0);
+    assert!(!sc.has(Effect::PipeCooling));
+    // With pipes the same schedules do produce pipe terms.
+    let sc = staged_scene("\"hydration\", \"ambient\", \"pipe_cooling\"");
+    let mut sim = Simulation::new(&sc, &mesh, &schedules).unwrap();
+    assert!(
+        sim.run(None, &mut |_, _| {})
+            .unwrap()
+            .thermal
+            .unwrap()
+            .pipe_terms
+            > 0
+    );
+}
+
+#[test]
+fn air_law_without_weather_is_used() {
+    let air = Air {
+        mean_c: 10.0,
+        amplitude_c: 0.0,
+        warmest_day_of_year: 1.0,
+        film_w_m2k: 10.0,
+    };
+    let a = AirTemperature::new(date(2024, 1, 1), air, None);
+    assert_eq!(a.at(17.5), 10.0);
+}
