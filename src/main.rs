@@ -51,6 +51,9 @@ enum StudyCommand {
         /// Time only the first (demo) scene.
         #[arg(long)]
         quick: bool,
+        /// Stop each staged run after this many days (the complete-dam step is still timed).
+        #[arg(long)]
+        days: Option<f64>,
     },
 }
 
@@ -128,7 +131,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             Ok(())
         }
         Command::Study {
-            what: StudyCommand::Perf { scenes, quick },
+            what:
+                StudyCommand::Perf {
+                    scenes,
+                    quick,
+                    days,
+                },
         } => {
             let scenes = if scenes.is_empty() {
                 let mut v = vec![bundled("models/demo_arch.toml")];
@@ -139,7 +147,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             } else {
                 scenes
             };
-            groutready::study::perf(&scenes)
+            groutready::study::perf(&scenes, days)
         }
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out },

@@ -593,13 +593,77 @@ fn timing_of_hydration_under_cooling() {
 #[test]
 #[ignore]
 fn dev_two() {
-    let pipe = ZhuPipe { p: 0.01, s: 1.2 };
-    let r = 4.254879408332758101943;
-    let rise = AdiabaticRise::Compound {
-        theta0: 25.0,
-        a: 0.69,
-        b: 0.3,
+    let pipe = ZhuPipe {
+        p: 0.05075349570085977,
+        s: 1.2,
     };
-    let h = hydration_under_cooling(&pipe, &rise, 0.5, 60.0);
+    let r = 0.38612693186129457887386;
+    let rise = AdiabaticRise::Hyperbolic {
+        theta0: 25.0,
+        n: 0.33732535620422077,
+    };
+    let h = hydration_under_cooling(&pipe, &rise, 5.0, 20.0);
     println!("{:e} {:e}", h, (h - r) / r);
+}
+
+#[test]
+#[ignore]
+fn dev_dump() {
+    let txt = std::fs::read_to_string("/tmp/mat/cases.txt").unwrap();
+    let mut worst: f64 = 0.0;
+    let mut worst_bf: f64 = 0.0;
+    for line in txt.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let (rise, rest) = match w[0] {
+            "exp" => (
+                AdiabaticRise::Exponential {
+                    theta0: 25.0,
+                    m: w[1].parse().unwrap(),
+                },
+                &w[2..],
+            ),
+            "comp" => (
+                AdiabaticRise::Compound {
+                    theta0: 25.0,
+                    a: w[1].parse().unwrap(),
+                    b: w[2].parse().unwrap(),
+                },
+                &w[3..],
+            ),
+            _ => (
+                AdiabaticRise::Hyperbolic {
+                    theta0: 25.0,
+                    n: w[1].parse().unwrap(),
+                },
+                &w[2..],
+            ),
+        };
+        let p: f64 = rest[0].parse().unwrap();
+        let s: f64 = rest[1].parse().unwrap();
+        let tk: f64 = rest[2].parse().unwrap();
+        let t: f64 = rest[3].parse().unwrap();
+        let r: f64 = rest[4].parse().unwrap();
+        let pipe = ZhuPipe { p, s };
+        let h = hydration_under_cooling(&pipe, &rise, tk, t);
+        let bf = brute_force(&pipe, &rise, tk, t);
+        let n = 2000;
+        let t0 = std::time::Instant::now();
+        let mut acc = 0.0;
+        for i in 0..n {
+            acc += hydration_under_cooling(&pipe, &rise, tk, t * (1.0 + 1e-9 * i as f64));
+        }
+        let us = t0.elapsed().as_secs_f64() / n as f64 * 1e6;
+        std::hint::black_box(acc);
+        let relv = if r.is_normal() { (h - r) / r } else { h };
+        let relb = if r.is_normal() { (bf - r) / r } else { bf };
+        if r.is_normal() {
+            worst = worst.max(relv.abs());
+            worst_bf = worst_bf.max(relb.abs());
+        }
+        println!(
+            "{:>5} rel={:>10.2e} bf={:>10.2e} us={:6.2} H={:e} | {}",
+            w[0], relv, relb, us, h, line
+        );
+    }
+    println!("worst {worst:e} brute force worst {worst_bf:e}");
 }

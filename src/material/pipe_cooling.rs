@@ -417,7 +417,7 @@ const CUT: f64 = 42.0;
 /// Largest change of either monotone term (η or pV^s) inside one panel.
 const PANEL_VAR: f64 = 16.0;
 /// Same for the end panel at V → 0, which carries δ = h w⁴.
-const END_VAR: f64 = 2.0;
+const END_VAR: f64 = 1.0;
 /// Same for the compound form's end panel at τ_k, which carries y = y_b w⁶.
 const LEFT_END_VAR: f64 = 1.0;
 /// Growth ratio of panels away from a branch point.
