@@ -54,6 +54,9 @@ enum StudyCommand {
         /// Stop each staged run after this many days (the complete-dam step is still timed).
         #[arg(long)]
         days: Option<f64>,
+        /// Thermal solver(s) to time: cholesky, pcg or both (default: each scene's own).
+        #[arg(long)]
+        solver: Option<String>,
     },
 }
 
@@ -136,6 +139,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     scenes,
                     quick,
                     days,
+                    solver,
                 },
         } => {
             let scenes = if scenes.is_empty() {
@@ -147,7 +151,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             } else {
                 scenes
             };
-            groutready::study::perf(&scenes, days)
+            use groutready::scene::ThermalSolverKind as K;
+            let solvers = match solver.as_deref() {
+                None => vec![],
+                Some("cholesky") => vec![K::Cholesky],
+                Some("pcg") => vec![K::Pcg],
+                Some("both") => vec![K::Cholesky, K::Pcg],
+                Some(other) => {
+                    anyhow::bail!("--solver: expected cholesky, pcg or both, found {other:?}")
+                }
+            };
+            groutready::study::perf(&scenes, days, &solvers)
         }
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out },

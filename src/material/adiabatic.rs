@@ -13,6 +13,9 @@
 //! at early age. Verified in `tests/material_laws.rs` against the closed
 //! forms and (for θ′) against central differences of θ.
 
+// `!(x > 0.0)` is the comparison that also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use serde::{Deserialize, Serialize};
 
 /// The three adiabatic-rise forms of Zhu Bofang's practice.

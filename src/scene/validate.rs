@@ -125,6 +125,10 @@ pub(super) fn validate(s: &Scene) -> Check {
         }
     }
 
+    if let Err((key, message)) = s.solver.validate() {
+        return Err(SceneError::invalid(&key, message));
+    }
+
     // Output.
     for d in &s.output.snapshots {
         if *d < s.epoch {

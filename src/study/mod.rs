@@ -1,13 +1,13 @@
 //! Benchmarks and studies: what accuracy costs in time. Figures are printed,
 //! never asserted.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
 
 use crate::app::{self, RunSummary};
-use crate::scene::Scene;
+use crate::scene::{Scene, ThermalSolverKind};
 use crate::schedule::{self, SynthParams};
 use crate::sim::Simulation;
 
@@ -28,12 +28,17 @@ pub fn summary_line(s: &RunSummary) -> String {
 
 /// Times the thermal history of each scene (no files written), then the
 /// cost of one step of the complete dam (every lift live): its symbolic and
-/// numeric factorisation and the per-step solve, the figures that decide
-/// how a full-size run scales. `max_days` caps the staged run.
-pub fn perf(scenes: &[std::path::PathBuf], max_days: Option<f64>) -> anyhow::Result<()> {
+/// numeric factorisation and the per-step solve, the figures that decide how
+/// a full-size run scales. `max_days` caps the staged run; `solvers` lists
+/// the thermal solvers to time (empty = each scene's own).
+pub fn perf(
+    scenes: &[PathBuf],
+    max_days: Option<f64>,
+    solvers: &[ThermalSolverKind],
+) -> anyhow::Result<()> {
     println!(
         "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
-        "scene",
+        "scene/solver",
         "elements",
         "dofs",
         "pours",
@@ -49,38 +54,120 @@ pub fn perf(scenes: &[std::path::PathBuf], max_days: Option<f64>) -> anyhow::Res
     );
     for path in scenes {
         let t_load = Instant::now();
-        let (scene, mesh, schedules) = load_or_synthesize(path)?;
+        let (scene0, mesh, schedules) = load_or_synthesize(path)?;
         let load_s = t_load.elapsed().as_secs_f64();
-        let mut sim = Simulation::new(&scene, &mesh, &schedules)?;
-        if let Some(days) = max_days {
-            sim.timeline.end_day = sim.timeline.end_day.min(days as i64);
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let kinds = if solvers.is_empty() {
+            vec![scene0.solver.thermal]
+        } else {
+            solvers.to_vec()
+        };
+        for kind in kinds {
+            let mut scene = scene0.clone();
+            scene.solver.thermal = kind;
+            let mut sim = Simulation::new(&scene, &mesh, &schedules)?;
+            if let Some(days) = max_days {
+                sim.timeline.end_day = sim.timeline.end_day.min(days as i64);
+            }
+            let stats = sim.run(None, &mut |_, _| {})?;
+            let t = stats.thermal.unwrap_or_default();
+            println!(
+                "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+                format!("{stem}/{}", solver_name(kind)),
+                mesh.elements.len(),
+                mesh.n_thermal_dofs,
+                stats.pours,
+                stats.steps,
+                t.symbolic,
+                t.numeric,
+                stats.seconds,
+                1e3 * stats.seconds / stats.steps.max(1) as f64,
+                t.seconds_symbolic,
+                t.seconds_numeric,
+                t.seconds_solve,
+                t.seconds_assembly,
+            );
+            println!(
+                "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations",
+                "", load_s, sim.day, t.max_dofs, t.pcg_iterations
+            );
+            if scene.any_thermal() {
+                let full = full_dam_step_cost(&scene, &mesh, 10)?;
+                println!(
+                    "{:<22} complete dam: {} dofs, analysis {:.3} s, factorisation {:.3} s, solve {:.1} ms, step {:.1} ms",
+                    "",
+                    full.dofs,
+                    full.symbolic_s,
+                    full.numeric_s,
+                    1e3 * full.solve_s_per_step,
+                    1e3 * full.step_s
+                );
+            }
         }
-        let stats = sim.run(None, &mut |_, _| {})?;
-        let t = stats.thermal.unwrap_or_default();
-        println!(
-            "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-            path.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            mesh.elements.len(),
-            mesh.n_thermal_dofs,
-            stats.pours,
-            stats.steps,
-            t.symbolic,
-            t.numeric,
-            stats.seconds,
-            1e3 * stats.seconds / stats.steps.max(1) as f64,
-            t.seconds_symbolic,
-            t.seconds_numeric,
-            t.seconds_solve,
-            t.seconds_assembly,
-        );
-        println!(
-            "{:<22} (inputs and mesh: {:.2} s; largest live system {} dofs)",
-            "", load_s, t.max_dofs
-        );
     }
     Ok(())
+}
+
+fn solver_name(kind: ThermalSolverKind) -> &'static str {
+    match kind {
+        ThermalSolverKind::Cholesky => "cholesky",
+        ThermalSolverKind::Pcg => "pcg",
+    }
+}
+
+/// Cost of stepping the complete dam.
+#[derive(Debug, Clone, Copy)]
+pub struct FullDamCost {
+    pub dofs: usize,
+    /// live-set analysis (pattern, ordering, symbolic Cholesky) of the first step
+    pub symbolic_s: f64,
+    /// numeric factorisation of the first step (0 for PCG)
+    pub numeric_s: f64,
+    /// solve time per later step
+    pub solve_s_per_step: f64,
+    /// wall time of a later step (sources, right-hand side, solve, residual check)
+    pub step_s: f64,
+}
+
+/// Pours every lift on day 0 and takes `steps` one-day steps.
+pub fn full_dam_step_cost(
+    scene: &Scene,
+    mesh: &crate::mesh::Mesh,
+    steps: usize,
+) -> anyhow::Result<FullDamCost> {
+    use crate::mesh::Part;
+    let mut th = crate::thermal::ThermalModel::new(mesh, scene, Vec::new(), None, None)?;
+    let mut lifts: Vec<(u32, u32)> = mesh
+        .parts
+        .iter()
+        .filter_map(|p| match p {
+            Part::Concrete { block, lift } => Some((*block, *lift)),
+            Part::Rock => None,
+        })
+        .collect();
+    lifts.sort_unstable();
+    lifts.dedup();
+    for (block, lift) in lifts {
+        th.pour(block, lift, 0.0, 15.0);
+    }
+    th.step(0.0, 1.0)?;
+    let first = th.stats;
+    let steps = steps.max(2);
+    let t = Instant::now();
+    for k in 1..steps {
+        th.step(k as f64, k as f64 + 1.0)?;
+    }
+    let n = (steps - 1) as f64;
+    Ok(FullDamCost {
+        dofs: first.max_dofs,
+        symbolic_s: first.seconds_symbolic,
+        numeric_s: first.seconds_numeric,
+        solve_s_per_step: (th.stats.seconds_solve - first.seconds_solve) / n,
+        step_s: t.elapsed().as_secs_f64() / n,
+    })
 }
 
 /// Scene, mesh and schedules; schedules synthesised when the scene's folder is missing.

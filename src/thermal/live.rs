@@ -108,7 +108,8 @@ pub struct LiveSystem {
     pub air_load: Vec<f64>,
     /// live dofs with a prescribed (water) temperature
     pub fixed: Vec<bool>,
-    solver: CholeskySolver,
+    /// symbolic analysis; absent when the run solves by PCG
+    solver: Option<CholeskySolver>,
     factors: Vec<(u64, CholeskySolver)>,
 }
 
@@ -120,6 +121,7 @@ impl LiveSystem {
         data: &ElementData,
         exposed: Vec<ExposedFace>,
         consistent: bool,
+        direct: bool,
     ) -> Result<LiveSystem, SolveError> {
         let mut index_of = vec![NONE; dof_xyz.len()];
         let mut dofs = Vec::new();
@@ -137,18 +139,26 @@ impl LiveSystem {
         }
         let n = dofs.len();
         let pattern = Arc::new(Pattern::new(n, &local_dofs));
-        // Nested dissection on the dof coordinates halves the fill of AMD on
-        // 3-D blocks and makes the numeric factorisation several times faster.
-        let xyz: Vec<[f64; 3]> = dofs.iter().map(|&d| dof_xyz[d as usize]).collect();
-        let ordering = Ordering::Custom(nested_dissection(&pattern, &xyz, 64));
-        // Thread start-up costs more than it saves on small systems (measured:
-        // the demo's ≤ 7k-dof systems factor 1.7× faster on one thread).
-        let par = if n < PARALLEL_FROM_DOFS {
-            faer::Par::Seq
+        let solver = if direct {
+            // Nested dissection on the dof coordinates halves the fill of AMD on
+            // 3-D blocks and makes the numeric factorisation several times faster.
+            let xyz: Vec<[f64; 3]> = dofs.iter().map(|&d| dof_xyz[d as usize]).collect();
+            let ordering = Ordering::Custom(nested_dissection(&pattern, &xyz, 64));
+            // Thread start-up costs more than it saves on small systems (measured:
+            // the demo's <= 7k-dof systems factor 1.7x faster on one thread).
+            let par = if n < PARALLEL_FROM_DOFS {
+                faer::Par::Seq
+            } else {
+                faer::Par::rayon(0)
+            };
+            Some(CholeskySolver::with_options(
+                pattern.clone(),
+                &ordering,
+                par,
+            )?)
         } else {
-            faer::Par::rayon(0)
+            None
         };
-        let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
 
         let mut cap_lumped = vec![0.0; n];
         for (slot, &e) in live_elems.iter().enumerate() {
@@ -256,7 +266,8 @@ impl LiveSystem {
             }
         }
         a.apply_dirichlet(&self.fixed);
-        let mut solver = self.solver.fork()?;
+        let base = self.solver.as_ref().ok_or(SolveError::NotFactorized)?;
+        let mut solver = base.fork()?;
         solver.factorize(&a)?;
         // A handful of step lengths recur (the step ladder); keep the last few.
         if self.factors.len() >= 6 {
@@ -264,6 +275,101 @@ impl LiveSystem {
         }
         self.factors.push((key, solver));
         Ok((&self.factors.last().expect("just pushed").1, true))
+    }
+
+    /// out = A v for A = C + θΔt(K+H) with Dirichlet rows and columns replaced
+    /// by the identity (the matrix the direct path factorises).
+    fn apply(
+        &self,
+        dt: f64,
+        theta: f64,
+        v: &[f64],
+        out: &mut [f64],
+        masked: &mut [f64],
+        tmp: &mut [f64],
+    ) {
+        for i in 0..v.len() {
+            masked[i] = if self.fixed[i] { 0.0 } else { v[i] };
+        }
+        self.cap_mul(masked, out);
+        self.kh.mul_vec(masked, tmp);
+        for i in 0..v.len() {
+            out[i] = if self.fixed[i] {
+                v[i]
+            } else {
+                out[i] + theta * dt * tmp[i]
+            };
+        }
+    }
+
+    /// Jacobi-preconditioned conjugate gradients on the system of
+    /// [`LiveSystem::factor`]; `x` holds the initial guess (fixed entries must
+    /// already equal `b`). Returns the iteration count, or the relative
+    /// residual reached when `max_iter` is exhausted.
+    pub fn solve_pcg(
+        &self,
+        dt: f64,
+        theta: f64,
+        b: &[f64],
+        x: &mut [f64],
+        tol: f64,
+        max_iter: usize,
+    ) -> Result<usize, f64> {
+        let n = b.len();
+        let kh_diag = self.kh.diag();
+        let cap_diag = match &self.cap_consistent {
+            Some(c) => c.diag(),
+            None => self.cap_lumped.clone(),
+        };
+        let inv_diag: Vec<f64> = (0..n)
+            .map(|i| {
+                if self.fixed[i] {
+                    0.0
+                } else {
+                    1.0 / (cap_diag[i] + theta * dt * kh_diag[i])
+                }
+            })
+            .collect();
+        let (mut masked, mut tmp, mut ap) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        self.apply(dt, theta, x, &mut ap, &mut masked, &mut tmp);
+        let mut r: Vec<f64> = (0..n)
+            .map(|i| if self.fixed[i] { 0.0 } else { b[i] - ap[i] })
+            .collect();
+        let b_norm = (0..n)
+            .filter(|&i| !self.fixed[i])
+            .map(|i| b[i] * b[i])
+            .sum::<f64>()
+            .sqrt();
+        let target = tol * b_norm.max(f64::MIN_POSITIVE);
+        let mut z: Vec<f64> = (0..n).map(|i| inv_diag[i] * r[i]).collect();
+        let mut p = z.clone();
+        let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+        for it in 0..max_iter {
+            let r_norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if r_norm <= target {
+                return Ok(it);
+            }
+            self.apply(dt, theta, &p, &mut ap, &mut masked, &mut tmp);
+            for i in 0..n {
+                if self.fixed[i] {
+                    ap[i] = 0.0;
+                }
+            }
+            let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
+            let alpha = rz / pap;
+            for i in 0..n {
+                x[i] += alpha * p[i];
+                r[i] -= alpha * ap[i];
+                z[i] = inv_diag[i] * r[i];
+            }
+            let rz_new: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for i in 0..n {
+                p[i] = z[i] + beta * p[i];
+            }
+        }
+        Err(r.iter().map(|v| v * v).sum::<f64>().sqrt() / b_norm.max(f64::MIN_POSITIVE))
     }
 
     /// y = C x

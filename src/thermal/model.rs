@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::fem::solver::SolveError;
 use crate::material::{AdiabaticRise, ZhuPipe};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZonePoint};
-use crate::scene::{CapacityKind, Effect, Scene};
+use crate::scene::{CapacityKind, Effect, Scene, ThermalSolverKind};
 
 use super::boundary::{AirTemperature, Water};
 use super::cooling::{lift_increment, ActiveStage, LiftSourceInput, PlannedStage, StageStatus};
@@ -30,6 +30,13 @@ pub enum ThermalError {
     },
     #[error("thermal solve on day {day:.3}: relative residual {residual:.3e} exceeds {RESIDUAL_TOLERANCE:.0e}")]
     Residual { day: f64, residual: f64 },
+    #[error("thermal PCG on day {day:.3} (step {dt} d) stopped after {iterations} iterations at relative residual {residual:.3e}")]
+    NotConverged {
+        day: f64,
+        dt: f64,
+        iterations: usize,
+        residual: f64,
+    },
     #[error("thermal solve on day {day:.3} produced a non-finite temperature")]
     NonFinite { day: f64 },
     #[error("element data: {0}")]
@@ -53,6 +60,8 @@ pub struct ThermalStats {
     pub assemblies: usize,
     /// evaluations of pipe-cooling source terms (lift × step)
     pub pipe_terms: usize,
+    /// conjugate-gradient iterations (PCG solver)
+    pub pcg_iterations: usize,
     pub seconds_symbolic: f64,
     pub seconds_numeric: f64,
     pub seconds_solve: f64,
@@ -78,6 +87,7 @@ pub struct ThermalModel {
     water: Option<Water>,
     theta: f64,
     consistent: bool,
+    solver: crate::scene::SolverSettings,
     surface_kind: HashMap<(u32, u8), SurfaceKind>,
     dof_z: Vec<f64>,
     dof_xyz: Vec<[f64; 3]>,
@@ -158,6 +168,7 @@ impl ThermalModel {
             },
             theta: scene.time.theta,
             consistent: scene.time.capacity == CapacityKind::Consistent,
+            solver: scene.solver.clone(),
             surface_kind,
             dof_z,
             dof_xyz,
@@ -326,8 +337,18 @@ impl ThermalModel {
         } else {
             Vec::new()
         };
-        let sys = LiveSystem::new(&self.dof_xyz, live, &self.data, exposed, self.consistent)?;
-        self.stats.symbolic += 1;
+        let direct = self.solver.thermal == ThermalSolverKind::Cholesky;
+        let sys = LiveSystem::new(
+            &self.dof_xyz,
+            live,
+            &self.data,
+            exposed,
+            self.consistent,
+            direct,
+        )?;
+        if direct {
+            self.stats.symbolic += 1;
+        }
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n());
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         self.sys = Some(sys);
@@ -489,29 +510,54 @@ impl ThermalModel {
             }
         }
 
-        let sys = self.sys.as_mut().expect("built");
-        let t = Instant::now();
-        let (factor, fresh) = sys
-            .factor(dt, theta)
-            .map_err(|source| ThermalError::Solve {
-                day: t1,
-                dt,
-                source,
-            })?;
-        if fresh {
-            self.stats.numeric += 1;
-            self.stats.seconds_numeric += t.elapsed().as_secs_f64();
-        }
-        let mut x = b;
-        let t_solve = Instant::now();
-        factor
-            .solve_in_place(&mut x)
-            .map_err(|source| ThermalError::Solve {
-                day: t1,
-                dt,
-                source,
-            })?;
-        self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+        let x = match self.solver.thermal {
+            ThermalSolverKind::Cholesky => {
+                let sys = self.sys.as_mut().expect("built");
+                let t = Instant::now();
+                let (factor, fresh) =
+                    sys.factor(dt, theta)
+                        .map_err(|source| ThermalError::Solve {
+                            day: t1,
+                            dt,
+                            source,
+                        })?;
+                if fresh {
+                    self.stats.numeric += 1;
+                    self.stats.seconds_numeric += t.elapsed().as_secs_f64();
+                }
+                let mut x = b;
+                let t_solve = Instant::now();
+                factor
+                    .solve_in_place(&mut x)
+                    .map_err(|source| ThermalError::Solve {
+                        day: t1,
+                        dt,
+                        source,
+                    })?;
+                self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+                x
+            }
+            ThermalSolverKind::Pcg => {
+                let sys = self.sys.as_ref().expect("built");
+                let t_solve = Instant::now();
+                // Start from the old temperatures; prescribed values are exact already.
+                let mut x: Vec<f64> = (0..n)
+                    .map(|i| if sys.fixed[i] { b[i] } else { t_old[i] })
+                    .collect();
+                let max = self.solver.pcg_max_iterations as usize;
+                let iterations = sys
+                    .solve_pcg(dt, theta, &b, &mut x, self.solver.pcg_tolerance, max)
+                    .map_err(|residual| ThermalError::NotConverged {
+                        day: t1,
+                        dt,
+                        iterations: max,
+                        residual,
+                    })?;
+                self.stats.pcg_iterations += iterations;
+                self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+                x
+            }
+        };
         if x.iter().any(|v| !v.is_finite()) {
             return Err(ThermalError::NonFinite { day: t1 });
         }
