@@ -8,6 +8,7 @@
 
 pub mod app;
 pub mod fem;
+pub mod joint;
 pub mod material;
 pub mod mesh;
 pub mod output;

@@ -24,6 +24,7 @@
 //! one symbolic analysis serves several numeric factorisations; nested
 //! dissection and AMD give the same solution.
 
+pub mod elasticity;
 pub mod error;
 pub mod hex8;
 pub mod ordering;

@@ -14,6 +14,8 @@
 //! are in the submodule docs; the checks live in `tests/material_laws.rs`.
 
 pub mod adiabatic;
+pub mod ageing;
+pub mod creep;
 pub mod pipe_cooling;
 
 pub use adiabatic::AdiabaticRise;

@@ -1,0 +1,1 @@
+//! Small-strain solid elasticity on hex8: B matrices, stiffness, loads, stresses.

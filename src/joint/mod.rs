@@ -1,0 +1,1 @@
+//! Transverse joints: contact before grouting, thin bonded layer after.

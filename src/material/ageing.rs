@@ -1,0 +1,1 @@
+//! Ageing of concrete: elastic modulus E(τ) and autogenous deformation G(τ).

@@ -1,0 +1,1 @@
+//! Creep of concrete: Zhu Bofang's compliance and its exponential recursion.
