@@ -490,3 +490,55 @@ fn pcg_and_cholesky_agree_on_a_staged_run() {
     let scale = l.births.abs() + l.hydration.abs() + l.pipes.abs() + l.air.abs() + l.water.abs();
     assert!((th.stored_heat() - l.inflow()).abs() / scale < 1e-10);
 }
+
+#[test]
+fn submerged_upstream_nodes_take_the_water_temperature_at_their_depth() {
+    use groutready::fem::hex8::FACES;
+    use groutready::mesh::SurfaceKind;
+    use groutready::thermal::boundary::{Series, Water};
+    let sc = staged_scene("\"hydration\", \"ambient\", \"reservoir_temperature\"");
+    let mesh = blocks_mesh(&sc);
+    let schedules = staged_schedules();
+    let mut sim = Simulation::new(&sc, &mesh, &schedules).unwrap();
+    sim.run(None, &mut |_, _| {}).unwrap();
+    let end = sim.day;
+    let water = Water::new(
+        sc.epoch,
+        sc.reservoir.clone().unwrap(),
+        Series::from_dated(sc.epoch, schedules.reservoir.as_ref().unwrap()),
+    );
+    let level = water.level(end).unwrap();
+    let th = sim.thermal.as_ref().unwrap();
+    let mut checked = 0;
+    for s in mesh.surfaces.iter().filter(|s| s.kind == SurfaceKind::Wet) {
+        for &k in &FACES[s.face as usize] {
+            let node = mesh.elements[s.elem as usize][k] as usize;
+            let z = mesh.nodes[node][2];
+            if z <= level {
+                let t = th.state.temperature[mesh.thermal_dof[node] as usize];
+                let expected = water.temperature(end, level - z);
+                assert!(
+                    (t - expected).abs() < 1e-12,
+                    "node {node} at z {z}: {t} vs {expected}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 10, "only {checked} submerged nodes checked");
+    // ...and nodes above the water are not held at a water temperature.
+    let elements = &mesh.elements;
+    let dry = mesh
+        .surfaces
+        .iter()
+        .filter(|s| s.kind == SurfaceKind::Wet)
+        .flat_map(|s| {
+            FACES[s.face as usize]
+                .iter()
+                .map(move |&k| elements[s.elem as usize][k] as usize)
+        })
+        .find(|&n| mesh.nodes[n][2] > level + 1.0)
+        .expect("a dry upstream node");
+    let t = th.state.temperature[mesh.thermal_dof[dry] as usize];
+    assert!((t - water.temperature(end, 0.0)).abs() > 1e-6);
+}

@@ -34,6 +34,7 @@ pub mod solver;
 pub mod sparse;
 pub mod thermal_kernels;
 
+pub use elasticity::{isotropic_d, poisson_matrix, principal_stresses, von_mises, SolidGauss};
 pub use error::ElementError;
 pub use ordering::{nested_dissection, Ordering};
 pub use quadrature::{gauss_hex, gauss_legendre, gauss_quad, Rule};

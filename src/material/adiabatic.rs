@@ -35,7 +35,7 @@ pub enum AdiabaticRise {
 pub const MIN_RATE_AGE: f64 = 1e-12;
 
 impl AdiabaticRise {
-    /// Final adiabatic rise θ0 [°C].
+    /// Final adiabatic rise θ0 \[°C\].
     pub fn theta0(&self) -> f64 {
         match *self {
             AdiabaticRise::Exponential { theta0, .. }
@@ -44,7 +44,7 @@ impl AdiabaticRise {
         }
     }
 
-    /// θ(τ) [°C]; 0 for τ ≤ 0 (not yet poured).
+    /// θ(τ) \[°C\]; 0 for τ ≤ 0 (not yet poured).
     pub fn theta(&self, age: f64) -> f64 {
         if age.is_nan() {
             return f64::NAN;
@@ -59,7 +59,7 @@ impl AdiabaticRise {
         }
     }
 
-    /// dθ/dτ [°C/day]. 0 for τ < 0; for τ ≥ 0 the right derivative at
+    /// dθ/dτ \[°C/day\]. 0 for τ < 0; for τ ≥ 0 the right derivative at
     /// max(τ, [`MIN_RATE_AGE`]), which keeps the compound form with b < 1
     /// finite at τ = 0.
     pub fn rate(&self, age: f64) -> f64 {

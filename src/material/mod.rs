@@ -19,4 +19,9 @@ pub mod creep;
 pub mod pipe_cooling;
 
 pub use adiabatic::AdiabaticRise;
+pub use ageing::{mid_step_age, AgeStepError, AutogenousLaw, ModulusLaw, ModulusOfAge, Poisson};
+pub use creep::{
+    coefficients, commit, commit_scalar, eta, eta_scalar, CreepLaw, CreepState, CreepTerm,
+    ScalarCreepState, StepCoefficients,
+};
 pub use pipe_cooling::{hydration_under_cooling, PipeLayout, ZhuPipe};

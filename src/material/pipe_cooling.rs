@@ -2,7 +2,7 @@
 //!
 //! # Equations
 //!
-//! A coil of length L [m] with water flow q_w embedded at spacings S1 × S2
+//! A coil of length L \[m\] with water flow q_w embedded at spacings S1 × S2
 //! cools an equivalent cylinder of diameter D = 1.167 √(S1 S2) (radius
 //! b = D/2). Its mean temperature, with water at T_w and initial mean T0,
 //! is T̄ = T_w + (T0 − T_w) φ(t) + H(t) with
@@ -11,7 +11,7 @@
 //! * p = k (a′/D²)^s, a′ the (corrected, see below) diffusivity in m²/day;
 //! * k = 2.08 − 1.174 ξ + 0.256 ξ², s = 0.971 + 0.1485 ξ − 0.0445 ξ²;
 //! * ξ = λ L / (c_w ρ_w q_w), λ the concrete conductivity [W/(m K)],
-//!   c_w [J/(kg K)], ρ_w [kg/m³], q_w [m³/s]: dimensionless, it measures how
+//!   c_w [J/(kg K)], ρ_w \[kg/m³\], q_w \[m³/s\]: dimensionless, it measures how
 //!   much the water warms along the coil;
 //! * H(t) = ∫₀ᵗ φ(t − u) θ′(τ_k + u) du, the hydration heat that stays in
 //!   the concrete while the pipes run (θ0 ψ(t) of Zhu when τ_k = 0), where
@@ -102,21 +102,21 @@ use super::adiabatic::{positive, AdiabaticRise};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PipeLayout {
-    /// Horizontal pipe spacing S1 [m].
+    /// Horizontal pipe spacing S1 \[m\].
     pub spacing_horizontal_m: f64,
-    /// Vertical pipe spacing S2 [m] (usually the lift height or half of it).
+    /// Vertical pipe spacing S2 \[m\] (usually the lift height or half of it).
     pub spacing_vertical_m: f64,
-    /// Length L of one pipe coil [m].
+    /// Length L of one pipe coil \[m\].
     pub length_m: f64,
     /// Water flow q_w [L/min].
     pub flow_l_per_min: f64,
-    /// Outer pipe radius c [m].
+    /// Outer pipe radius c \[m\].
     pub outer_radius_m: f64,
-    /// Inner pipe radius r0 [m].
+    /// Inner pipe radius r0 \[m\].
     pub inner_radius_m: f64,
     /// Conductivity of the pipe wall λ1 [W/(m K)]: HDPE ≈ 0.4–1.7, steel ≈ 45.
     pub wall_conductivity_w_mk: f64,
-    /// Water density [kg/m³], default 1000.
+    /// Water density \[kg/m³\], default 1000.
     #[serde(default = "default_water_density")]
     pub water_density: f64,
     /// Water specific heat [J/(kg K)], default 4186.
@@ -165,7 +165,7 @@ impl PipeLayout {
         self.flow_l_per_min / 1000.0 / 60.0
     }
 
-    /// Diameter D = 1.167 √(S1 S2) of Zhu's equivalent cooling cylinder [m].
+    /// Diameter D = 1.167 √(S1 S2) of Zhu's equivalent cooling cylinder \[m\].
     pub fn cylinder_diameter_m(&self) -> f64 {
         1.167 * (self.spacing_horizontal_m * self.spacing_vertical_m).sqrt()
     }
@@ -199,17 +199,17 @@ pub struct ZhuDerivation {
     pub k: f64,
     /// s(ξ).
     pub s: f64,
-    /// D = 1.167 √(S1 S2) [m].
+    /// D = 1.167 √(S1 S2) \[m\].
     pub diameter_m: f64,
-    /// Equivalent metal-pipe radius c1 = c exp(−(λ/λ1) ln(c/r0)) [m].
+    /// Equivalent metal-pipe radius c1 = c exp(−(λ/λ1) ln(c/r0)) \[m\].
     pub equivalent_radius_m: f64,
     /// b / c1 with b = D/2.
     pub b_over_c1: f64,
     /// First eigenvalue α1 b of the cylinder for b/c1.
     pub alpha1_b: f64,
-    /// a′ = a (α1 b / 0.71669)² [m²/day].
+    /// a′ = a (α1 b / 0.71669)² \[m²/day\].
     pub equivalent_diffusivity_m2_per_day: f64,
-    /// p = k (a′/D²)^s [1/day^s].
+    /// p = k (a′/D²)^s \[1/day^s\].
     pub p: f64,
 }
 
@@ -221,7 +221,7 @@ pub struct ZhuPipe {
 }
 
 impl ZhuPipe {
-    /// Zhu's φ for `layout` in a concrete of diffusivity a [m²/day] and
+    /// Zhu's φ for `layout` in a concrete of diffusivity a \[m²/day\] and
     /// conductivity λ [W/(m K)], corrected for the pipe radius and wall (see
     /// the module doc). Inputs are assumed valid (see [`ZhuPipe::try_new`]);
     /// invalid inputs give NaN or meaningless values, never a panic.

@@ -58,6 +58,17 @@ pub(super) fn validate(s: &Scene) -> Check {
     }
     if let Some(p) = &s.pipes {
         pipes("pipes", p)?;
+        // Zhu's fit of k(ξ), s(ξ) only holds for moderate ξ; the material
+        // module knows the range and the layout rules.
+        let (a, lambda) = (
+            s.concrete_diffusivity_m2_per_day(),
+            s.concrete.conductivity_w_mk,
+        );
+        if a.is_finite() && a > 0.0 && lambda > 0.0 {
+            if let Err(message) = crate::material::ZhuPipe::try_new(p, a, lambda) {
+                return Err(SceneError::invalid("pipes", format!("pipes: {message}")));
+            }
+        }
     }
     if s.has(Effect::PipeCooling) && s.pipes.is_none() {
         return Err(SceneError::invalid(

@@ -176,6 +176,29 @@ mod tests {
     }
 
     #[test]
+    fn weather_replaces_the_law_inside_its_dates_only() {
+        let law = Air {
+            mean_c: 16.0,
+            amplitude_c: 0.0,
+            warmest_day_of_year: 200.0,
+            film_w_m2k: 15.0,
+        };
+        let weather = Series::from_dated(
+            epoch(),
+            &[
+                (NaiveDate::from_ymd_opt(2024, 2, 1).unwrap(), 2.0),
+                (NaiveDate::from_ymd_opt(2024, 2, 3).unwrap(), 6.0),
+            ],
+        );
+        let air = AirTemperature::new(epoch(), law, Some(weather));
+        assert_eq!(air.at(31.0), 2.0);
+        assert_eq!(air.at(32.0), 4.0);
+        assert_eq!(air.at(33.0), 6.0);
+        assert_eq!(air.at(30.0), 16.0);
+        assert_eq!(air.at(34.0), 16.0);
+    }
+
+    #[test]
     fn water_temperature_decays_to_bottom_value() {
         let w = Water::new(
             epoch(),

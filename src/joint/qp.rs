@@ -1,0 +1,554 @@
+//! `qp`: the condensed contact problem as a sequence of convex cone programs
+//! solved by clarabel (Tresca fixed point for Coulomb friction).
+//!
+//! Each cone program, in the scaled variables of the module doc
+//! ([`super`]), is
+//!
+//! ```text
+//! min ½ r̃ᵀ W̃ r̃ + b̃ᵀ r̃   s.t.  r̃_n,i ≥ 0                  (nonnegative cone)
+//!                             (s̃_i, r̃_t,i) ∈ SOC(3)       (Coulomb points with a bound s̃_i > 0)
+//!                             r̃_t,i = 0                    (frictionless points, Coulomb points with s̃_i = 0:
+//!                                                           the variables are left out)
+//!                             r̃_t,i free                   (tied points: u_t = 0 is the optimality condition)
+//! ```
+//!
+//! with W̃ = sym(W)/ω, b̃ = b/β, r = r̃ β/ω (ω = mean diagonal of W,
+//! β = max|b|), so every tolerance is relative and the answer does not depend
+//! on the units. Only the upper triangle of W̃ over the kept variables is
+//! passed to clarabel.
+//!
+//! Friction (static μ_s, kinetic μ_k): the fixed point s̃_i ← μ_i r̃_n,i runs
+//! with μ_i = μ_s for every point until ‖Δs̃‖∞ ≤ tolerance·(‖s̃‖∞ + 1). Points
+//! then found closed with the tangential force on the μ_s bound start to slide:
+//! their coefficient becomes μ_k and the fixed point continues; this repeats
+//! until no new point reaches its static bound (the sliding set only grows, so
+//! there are at most n rounds; every cone program counts against
+//! `max_fixed_point`). A warm start gives the initial bounds s̃_i = μ_s r_n,i.
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+    SupportedConeT::{NonnegativeConeT, SecondOrderConeT},
+};
+use nalgebra::DMatrix;
+
+use super::contact::{
+    apply, check_dims, kkt_of, max_abs, mean_diagonal, point_rows_3d, point_rows_normal, scales_of,
+    ContactError, ContactProblem, ContactSolution, ContactState, FrictionModel, KktResidual,
+    NormalProblem, PointRows, Scales,
+};
+
+/// Settings of the `qp` contact solver. All tolerances are relative (see
+/// [`Scales`]); the defaults are what the acceptance tests use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSettings {
+    /// Interior-point tolerance handed to clarabel as `tol_gap_abs`,
+    /// `tol_gap_rel` and `tol_feas` (the problem is already scaled).
+    /// Default `1e-10`.
+    pub ipm_tolerance: f64,
+    /// Interior-point iteration limit per cone program. Default `200`.
+    pub ipm_max_iter: u32,
+    /// Accept clarabel's `AlmostSolved` (reduced accuracy) status; the own KKT
+    /// check still applies. Default `false`: any status but `Solved` is a
+    /// [`ContactError::Solver`].
+    pub accept_almost_solved: bool,
+    /// Friction fixed point stops when ‖Δs̃‖∞ ≤ tolerance·(‖s̃‖∞ + 1), s̃ the
+    /// slip bounds in units of [`Scales::force`]. Default `1e-9`.
+    pub tolerance: f64,
+    /// Maximum number of cone programs in the friction fixed point (all
+    /// static/kinetic rounds together). Default `100`.
+    pub max_fixed_point: usize,
+    /// Under-relaxation of the bound update s̃ ← s̃ + ρ(μ r̃_n − s̃), in (0, 1].
+    /// Default `1.0`.
+    pub relaxation: f64,
+    /// A point is open when r_n ≤ max(open_tolerance·F, u_n·F/D), F and D the
+    /// force and displacement scales (i.e. the smaller member of the
+    /// complementary pair is the zero one). Open points get r = 0 exactly
+    /// (tied points keep r_t). Default `1e-9`.
+    pub open_tolerance: f64,
+    /// A closed point slides when its bound s minus ‖r_t‖ is at most
+    /// max(slip_tolerance·s, ‖u_t‖·F/D). Default `1e-7`.
+    pub slip_tolerance: f64,
+    /// The solve fails with [`ContactError::Kkt`] when the relative KKT
+    /// residual of the returned solution exceeds this. Default `1e-6`.
+    pub kkt_tolerance: f64,
+    /// W must be symmetric to this times max|W_ij|. Default `1e-8`.
+    pub symmetry_tolerance: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        Self {
+            ipm_tolerance: 1e-10,
+            ipm_max_iter: 200,
+            accept_almost_solved: false,
+            tolerance: 1e-9,
+            max_fixed_point: 100,
+            relaxation: 1.0,
+            open_tolerance: 1e-9,
+            slip_tolerance: 1e-7,
+            kkt_tolerance: 1e-6,
+            symmetry_tolerance: 1e-8,
+        }
+    }
+}
+
+impl ContactSettings {
+    /// `Err` names the field and its value.
+    pub fn validate(&self) -> Result<(), ContactError> {
+        let positive = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(ContactError::Settings(format!(
+                    "{name} must be finite and > 0, got {v}"
+                )))
+            }
+        };
+        let nonneg = |name: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(ContactError::Settings(format!(
+                    "{name} must be finite and >= 0, got {v}"
+                )))
+            }
+        };
+        positive("ipm_tolerance", self.ipm_tolerance)?;
+        positive("tolerance", self.tolerance)?;
+        nonneg("open_tolerance", self.open_tolerance)?;
+        nonneg("slip_tolerance", self.slip_tolerance)?;
+        positive("kkt_tolerance", self.kkt_tolerance)?;
+        nonneg("symmetry_tolerance", self.symmetry_tolerance)?;
+        if !(self.relaxation.is_finite() && self.relaxation > 0.0 && self.relaxation <= 1.0) {
+            return Err(ContactError::Settings(format!(
+                "relaxation must be in (0, 1], got {}",
+                self.relaxation
+            )));
+        }
+        if self.ipm_max_iter == 0 {
+            return Err(ContactError::Settings(
+                "ipm_max_iter must be >= 1, got 0".into(),
+            ));
+        }
+        if self.max_fixed_point == 0 {
+            return Err(ContactError::Settings(
+                "max_fixed_point must be >= 1, got 0".into(),
+            ));
+        }
+        if self.slip_tolerance >= 1.0 {
+            return Err(ContactError::Settings(format!(
+                "slip_tolerance must be < 1, got {}",
+                self.slip_tolerance
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Result of the normal-only path.
+#[derive(Debug, Clone)]
+pub struct NormalSolution {
+    /// Normal contact forces (compressive ≥ 0), N.
+    pub r_n: Vec<f64>,
+    /// Gaps with the forces, `gap + W r_n`.
+    pub u_n: Vec<f64>,
+    /// `true` where the point carries force.
+    pub closed: Vec<bool>,
+    /// Interior-point iterations.
+    pub ipm_iterations: usize,
+    /// `kkt.max()`, relative.
+    pub kkt_residual: f64,
+    /// KKT residual by component (friction is 0).
+    pub kkt: KktResidual,
+    /// Reference magnitudes.
+    pub scales: Scales,
+}
+
+/// Solves the condensed frictional contact problem of one step.
+///
+/// `warm`: contact forces of a previous solve (3n, N) whose normal components
+/// seed the slip bounds. Errors: [`ContactError::Dimension`] /
+/// [`ContactError::Invalid`] / [`ContactError::Settings`] for bad input,
+/// [`ContactError::Solver`] when clarabel does not return `Solved`,
+/// [`ContactError::NotConverged`] when the fixed point exhausts
+/// `max_fixed_point`, [`ContactError::Kkt`] when the own check fails.
+pub fn solve(
+    problem: &ContactProblem,
+    settings: &ContactSettings,
+    warm: Option<&[f64]>,
+) -> Result<ContactSolution, ContactError> {
+    settings.validate()?;
+    problem.validate(settings.symmetry_tolerance)?;
+    let points = point_rows_3d(problem.friction);
+    let warm_rn = match warm {
+        Some(r) => {
+            check_dims("warm start", r.len(), 3 * points.len())?;
+            if let Some(k) = r.iter().position(|v| !v.is_finite()) {
+                return Err(ContactError::Invalid(format!(
+                    "warm start r[{k}] is not finite"
+                )));
+            }
+            Some(points.iter().map(|p| r[p.n]).collect::<Vec<_>>())
+        }
+        None => None,
+    };
+    let out = run(problem.w, problem.b, &points, settings, warm_rn.as_deref())?;
+    Ok(ContactSolution {
+        r: out.r,
+        u: out.u,
+        states: out.states,
+        fixed_point_iterations: out.cone_programs,
+        ipm_iterations: out.ipm_iterations,
+        kkt_residual: out.kkt.max(),
+        kkt: out.kkt,
+        scales: out.scales,
+    })
+}
+
+/// Normal-only path: min ½ rᵀ W r + gapᵀ r, r ≥ 0 (one nonnegative cone).
+pub fn solve_normal(
+    problem: &NormalProblem,
+    settings: &ContactSettings,
+) -> Result<NormalSolution, ContactError> {
+    settings.validate()?;
+    problem.validate(settings.symmetry_tolerance)?;
+    let points = point_rows_normal(problem.gap.len());
+    let out = run(problem.w, problem.gap, &points, settings, None)?;
+    Ok(NormalSolution {
+        closed: out.states.iter().map(|s| s.is_closed()).collect(),
+        r_n: out.r,
+        u_n: out.u,
+        ipm_iterations: out.ipm_iterations,
+        kkt_residual: out.kkt.max(),
+        kkt: out.kkt,
+        scales: out.scales,
+    })
+}
+
+struct CoreOut {
+    r: Vec<f64>,
+    u: Vec<f64>,
+    states: Vec<ContactState>,
+    cone_programs: usize,
+    ipm_iterations: usize,
+    kkt: KktResidual,
+    scales: Scales,
+}
+
+/// Coefficients of a Coulomb point (`None` for the other models).
+fn coulomb(model: FrictionModel) -> Option<(f64, f64)> {
+    match model {
+        FrictionModel::Coulomb { mu_s, mu_k } => Some((mu_s, mu_k)),
+        _ => None,
+    }
+}
+
+fn run(
+    w: &DMatrix<f64>,
+    b: &[f64],
+    points: &[PointRows],
+    settings: &ContactSettings,
+    warm_rn: Option<&[f64]>,
+) -> Result<CoreOut, ContactError> {
+    let m = b.len();
+    let omega = mean_diagonal(w);
+    let beta = max_abs(b);
+    if points.is_empty() || beta == 0.0 {
+        // Nothing pushes the sides together: r = 0 is optimal (W is PSD).
+        let r = vec![0.0; m];
+        let u = b.to_vec();
+        let scales = scales_of(w, b, Some(&u));
+        let kkt = kkt_of(points, &r, &u, &scales);
+        return Ok(CoreOut {
+            r,
+            u,
+            states: vec![ContactState::Open; points.len()],
+            cone_programs: 0,
+            ipm_iterations: 0,
+            kkt,
+            scales,
+        });
+    }
+    let bt: Vec<f64> = b.iter().map(|v| v / beta).collect();
+    let to_scaled_force = omega / beta;
+
+    let n = points.len();
+    // Current friction coefficient (μ_s, or μ_k once sliding) and bounds s̃.
+    let mut mu: Vec<f64> = points
+        .iter()
+        .map(|p| coulomb(p.model).map_or(0.0, |(s, _)| s))
+        .collect();
+    let mut sliding = vec![false; n];
+    let mut s: Vec<f64> = match warm_rn {
+        Some(rn) => (0..n)
+            .map(|i| mu[i] * (rn[i] * to_scaled_force).max(0.0))
+            .collect(),
+        None => vec![0.0; n],
+    };
+    let friction_iterates = mu.iter().any(|&v| v > 0.0);
+
+    let mut ipm_iterations = 0usize;
+    let mut iteration = 0usize;
+    let (rt, s_used) = loop {
+        iteration += 1;
+        let include_t: Vec<bool> = points
+            .iter()
+            .zip(&s)
+            .zip(&mu)
+            .map(|((p, &si), &mui)| match p.model {
+                FrictionModel::Tied => p.t.is_some(),
+                FrictionModel::Coulomb { .. } => {
+                    p.t.is_some() && si > 0.0 && si > settings.open_tolerance * mui
+                }
+                FrictionModel::Frictionless => false,
+            })
+            .collect();
+        let (rt, its) = solve_cone(w, omega, &bt, points, &s, &include_t, settings, iteration)?;
+        ipm_iterations += its;
+        if !friction_iterates {
+            break (rt, s);
+        }
+        let target: Vec<f64> = (0..n).map(|i| mu[i] * rt[points[i].n].max(0.0)).collect();
+        let mut diff = 0.0f64;
+        let mut size = 0.0f64;
+        for i in 0..n {
+            diff = diff.max((target[i] - s[i]).abs());
+            size = size.max(target[i]);
+        }
+        let change = diff / (size + 1.0);
+        if change <= settings.tolerance {
+            // Converged for the current coefficients: do points reach μ_s?
+            let ut = apply_scaled(w, omega, &bt, &rt);
+            let mut new_sliders = false;
+            for (i, p) in points.iter().enumerate() {
+                let Some((mu_s, mu_k)) = coulomb(p.model) else {
+                    continue;
+                };
+                if sliding[i] || mu_k >= mu_s || !is_closed(rt[p.n], ut[p.n], settings) {
+                    continue;
+                }
+                if at_bound(p, &rt, &ut, s[i], settings) {
+                    sliding[i] = true;
+                    mu[i] = mu_k;
+                    new_sliders = true;
+                }
+            }
+            if !new_sliders {
+                break (rt, s);
+            }
+            for i in 0..n {
+                s[i] = mu[i] * rt[points[i].n].max(0.0);
+            }
+        } else {
+            for i in 0..n {
+                s[i] += settings.relaxation * (target[i] - s[i]);
+            }
+        }
+        if iteration >= settings.max_fixed_point {
+            return Err(ContactError::NotConverged {
+                iterations: iteration,
+                change,
+            });
+        }
+    };
+
+    // Classify, clean the interior-point residue of open points, unscale.
+    let ut = apply_scaled(w, omega, &bt, &rt);
+    let mut rt = rt;
+    let mut states = Vec::with_capacity(n);
+    for (i, p) in points.iter().enumerate() {
+        let state = if !is_closed(rt[p.n], ut[p.n], settings) {
+            rt[p.n] = 0.0;
+            if let (Some([t1, t2]), false) = (p.t, matches!(p.model, FrictionModel::Tied)) {
+                rt[t1] = 0.0;
+                rt[t2] = 0.0;
+            }
+            ContactState::Open
+        } else {
+            match p.model {
+                FrictionModel::Frictionless => ContactState::Slip,
+                FrictionModel::Tied => ContactState::Stick,
+                FrictionModel::Coulomb { .. } => {
+                    if at_bound(p, &rt, &ut, s_used[i], settings) {
+                        ContactState::Slip
+                    } else {
+                        ContactState::Stick
+                    }
+                }
+            }
+        };
+        states.push(state);
+    }
+    let force = beta / omega;
+    let r: Vec<f64> = rt.iter().map(|v| v * force).collect();
+    let u = apply(w, b, &r);
+    if let Some(k) = r.iter().chain(u.iter()).position(|v| !v.is_finite()) {
+        return Err(ContactError::Solver {
+            status: format!("non-finite result at entry {k}"),
+            iteration,
+        });
+    }
+    let scales = scales_of(w, b, Some(&u));
+    let kkt = kkt_of(points, &r, &u, &scales);
+    if !(kkt.max() <= settings.kkt_tolerance) {
+        return Err(ContactError::Kkt {
+            residual: kkt.max(),
+            limit: settings.kkt_tolerance,
+        });
+    }
+    Ok(CoreOut {
+        r,
+        u,
+        states,
+        cone_programs: iteration,
+        ipm_iterations,
+        kkt,
+        scales,
+    })
+}
+
+/// Closed when the force is the larger member of the complementary pair
+/// (both scaled) and above the open tolerance.
+fn is_closed(rn: f64, un: f64, settings: &ContactSettings) -> bool {
+    rn > settings.open_tolerance.max(un)
+}
+
+/// Tangential force on its bound (scaled quantities).
+fn at_bound(p: &PointRows, rt: &[f64], ut: &[f64], bound: f64, settings: &ContactSettings) -> bool {
+    let Some([t1, t2]) = p.t else { return true };
+    let rnorm = rt[t1].hypot(rt[t2]);
+    let unorm = ut[t1].hypot(ut[t2]);
+    bound - rnorm <= (settings.slip_tolerance * bound).max(unorm)
+}
+
+/// ũ = b̃ + W̃ r̃ with W̃ = W/ω.
+fn apply_scaled(w: &DMatrix<f64>, omega: f64, bt: &[f64], rt: &[f64]) -> Vec<f64> {
+    let wr = apply(w, &vec![0.0; bt.len()], rt);
+    bt.iter().zip(wr).map(|(b, v)| b + v / omega).collect()
+}
+
+/// One cone program for the bounds `s` (scaled). Returns r̃ (all rows, zeros
+/// for left-out variables) and the interior-point iterations.
+#[allow(clippy::too_many_arguments)]
+fn solve_cone(
+    w: &DMatrix<f64>,
+    omega: f64,
+    bt: &[f64],
+    points: &[PointRows],
+    s: &[f64],
+    include_t: &[bool],
+    settings: &ContactSettings,
+    iteration: usize,
+) -> Result<(Vec<f64>, usize), ContactError> {
+    let m = bt.len();
+    let n = points.len();
+    // Variables (rows of W) and their constraint rows.
+    let mut var_rows: Vec<usize> = Vec::with_capacity(3 * n);
+    let mut var_con: Vec<Option<usize>> = Vec::with_capacity(3 * n);
+    let mut b_con: Vec<f64> = vec![0.0; n];
+    let mut cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(n)];
+    for (k, p) in points.iter().enumerate() {
+        var_rows.push(p.n);
+        var_con.push(Some(k));
+        if !include_t[k] {
+            continue;
+        }
+        let Some([t1, t2]) = p.t else { continue };
+        match p.model {
+            FrictionModel::Coulomb { .. } => {
+                let base = b_con.len();
+                b_con.extend_from_slice(&[s[k], 0.0, 0.0]);
+                cones.push(SecondOrderConeT(3));
+                var_rows.push(t1);
+                var_con.push(Some(base + 1));
+                var_rows.push(t2);
+                var_con.push(Some(base + 2));
+            }
+            FrictionModel::Tied => {
+                var_rows.push(t1);
+                var_con.push(None);
+                var_rows.push(t2);
+                var_con.push(None);
+            }
+            FrictionModel::Frictionless => {}
+        }
+    }
+    let nv = var_rows.len();
+    let n_con = b_con.len();
+
+    // P = triu(sym(W)/ω) over the kept variables.
+    let data = w.as_slice();
+    let inv = 0.5 / omega;
+    let mut colptr = Vec::with_capacity(nv + 1);
+    let mut rowval = Vec::with_capacity(nv * (nv + 1) / 2);
+    let mut nzval = Vec::with_capacity(nv * (nv + 1) / 2);
+    colptr.push(0);
+    for (c, &rc) in var_rows.iter().enumerate() {
+        for (a, &ra) in var_rows.iter().enumerate().take(c + 1) {
+            let v = (data[rc * m + ra] + data[ra * m + rc]) * inv;
+            if v != 0.0 {
+                rowval.push(a);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let p_mat = CscMatrix::new(nv, nv, colptr, rowval, nzval);
+    let q: Vec<f64> = var_rows.iter().map(|&r| bt[r]).collect();
+
+    // A: −1 at (constraint row, variable) so that s = b − A x = (r_n, (s_i, r_t)).
+    let mut colptr = Vec::with_capacity(nv + 1);
+    let mut rowval = Vec::with_capacity(nv);
+    let mut nzval = Vec::with_capacity(nv);
+    colptr.push(0);
+    for con in &var_con {
+        if let Some(row) = con {
+            rowval.push(*row);
+            nzval.push(-1.0);
+        }
+        colptr.push(rowval.len());
+    }
+    let a_mat = CscMatrix::new(n_con, nv, colptr, rowval, nzval);
+
+    let cl_settings = DefaultSettings::<f64> {
+        verbose: false,
+        max_iter: settings.ipm_max_iter,
+        tol_gap_abs: settings.ipm_tolerance,
+        tol_gap_rel: settings.ipm_tolerance,
+        tol_feas: settings.ipm_tolerance,
+        ..DefaultSettings::default()
+    };
+    let mut solver =
+        DefaultSolver::new(&p_mat, &q, &a_mat, &b_con, &cones, cl_settings).map_err(|e| {
+            ContactError::Solver {
+                status: format!("setup failed: {e}"),
+                iteration,
+            }
+        })?;
+    solver.solve();
+    let sol = &solver.solution;
+    let ok = match sol.status {
+        SolverStatus::Solved => true,
+        SolverStatus::AlmostSolved => settings.accept_almost_solved,
+        _ => false,
+    };
+    if !ok {
+        return Err(ContactError::Solver {
+            status: format!("{:?}", sol.status),
+            iteration,
+        });
+    }
+    let mut rt = vec![0.0; m];
+    for (v, &row) in var_rows.iter().enumerate() {
+        let x = sol.x.get(v).copied().unwrap_or(f64::NAN);
+        if !x.is_finite() {
+            return Err(ContactError::Solver {
+                status: format!("{:?} with a non-finite force", sol.status),
+                iteration,
+            });
+        }
+        rt[row] = x;
+    }
+    Ok((rt, sol.iterations as usize))
+}
