@@ -10,6 +10,7 @@ pub mod app;
 pub mod fem;
 pub mod joint;
 pub mod material;
+pub mod mechanics;
 pub mod mesh;
 pub mod output;
 pub mod progress;

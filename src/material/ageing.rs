@@ -29,8 +29,10 @@
 //!
 //! [`AutogenousLaw::increment`] returns G(τ1) − G(τ0) in a form that keeps
 //! relative precision for short late steps, ε∞ e^{−cτ0^d}(1 − e^{−c(τ1^d −
-//! τ0^d)}) with `expm1`; the increments of consecutive steps telescope, so
-//! their sum equals G at the last age to rounding, for any step sequence.
+//! τ0^d)}) with `expm1`/`ln_1p` (no cancellation in τ1^d − τ0^d either); the
+//! increments of consecutive steps telescope, so their sum equals G at the
+//! last age to rounding (≤ 1e-13 relative over hundreds of irregular steps),
+//! for any step sequence.
 //!
 //! # The Poisson matrix Q
 //!
@@ -205,16 +207,28 @@ impl AutogenousLaw {
 
     /// G(τ1) − G(τ0), the free strain of a step (volumetric: the same in
     /// xx, yy and zz, no shear). Ages ≤ 0 count as 0. Computed as
-    /// ε∞ e^{−cτ0^d} (1 − e^{−c(τ1^d − τ0^d)}), which keeps relative precision
-    /// for short steps at late ages; `increment(a, a) == 0` exactly and
-    /// `increment(b, a) == −increment(a, b)`.
+    /// ε∞ e^{−cτ0^d} (1 − e^{−c(τ1^d − τ0^d)}) with τ1^d − τ0^d =
+    /// τ0^d (e^{d ln(1 + Δτ/τ0)} − 1) through `expm1`/`ln_1p`, which keeps
+    /// full relative precision for short steps at late ages (a 1e-9 d step at
+    /// 300 d is exact to ~1e-15, where G(τ1) − G(τ0) would keep 4 digits).
+    /// `increment(a, a) == 0` and `increment(b, a) == −increment(a, b)`
+    /// exactly; consecutive increments telescope to G to rounding.
     pub fn increment(&self, age0: f64, age1: f64) -> f64 {
         if age0.is_nan() || age1.is_nan() {
             return f64::NAN;
         }
-        let x0 = self.c * age0.max(0.0).powf(self.d);
-        let x1 = self.c * age1.max(0.0).powf(self.d);
-        -self.eps_inf * (-x0).exp() * (x0 - x1).exp_m1()
+        if age1 < age0 {
+            return -self.increment(age1, age0);
+        }
+        let (a0, a1) = (age0.max(0.0), age1.max(0.0));
+        let x0 = self.c * a0.powf(self.d);
+        // c(τ1^d − τ0^d) without cancellation: τ0^d (e^{d ln(1 + Δ/τ0)} − 1).
+        let dx = if a0 > 0.0 {
+            x0 * (self.d * ((a1 - a0) / a0).ln_1p()).exp_m1()
+        } else {
+            self.c * a1.powf(self.d)
+        };
+        -self.eps_inf * (-x0).exp() * (-dx).exp_m1()
     }
 
     /// Final autogenous strain ε∞.

@@ -41,7 +41,7 @@ use std::path::{Path, PathBuf};
 use chrono::NaiveDate;
 use serde::{Deserialize, Serialize};
 
-use crate::material::{AdiabaticRise, PipeLayout};
+use crate::material::{AdiabaticRise, AutogenousLaw, CreepLaw, ModulusLaw, PipeLayout};
 use crate::mesh::geometry::Geometry;
 
 pub use error::SceneError;
@@ -61,6 +61,18 @@ pub enum Effect {
     Ambient,
     /// Reservoir water temperature on submerged faces (reservoir.csv).
     ReservoirTemperature,
+    /// Stresses from temperature changes (needs the thermal field, or none if no thermal effect).
+    ThermalStrain,
+    /// Self-weight of each lift, applied when it is poured.
+    SelfWeight,
+    /// Creep of concrete (Zhu's compliance, exponential recursion).
+    Creep,
+    /// Autogenous volume change of concrete.
+    Autogenous,
+    /// Hydrostatic water pressure on the upstream face (reservoir.csv).
+    ReservoirLoad,
+    /// Contact–joint composite elements on the transverse joints.
+    Joints,
 }
 
 /// A validated scene.
@@ -134,6 +146,21 @@ pub struct Concrete {
     /// Adiabatic temperature rise; required by the `hydration` effect.
     #[serde(default)]
     pub adiabatic: Option<AdiabaticRise>,
+    /// E(τ) = e0_pa·(1 − exp(−a τ^b)); required by any mechanical effect.
+    #[serde(default)]
+    pub modulus: Option<ModulusLaw>,
+    /// Poisson's ratio; required by any mechanical effect.
+    #[serde(default)]
+    pub poisson: Option<f64>,
+    /// Linear thermal expansion α [1/°C]; required by `thermal_strain`.
+    #[serde(default)]
+    pub expansion_per_c: Option<f64>,
+    /// Creep compliance terms; required by `creep`.
+    #[serde(default)]
+    pub creep: Option<CreepLaw>,
+    /// G(τ) = eps_inf·(1 − exp(−c τ^d)); required by `autogenous`.
+    #[serde(default)]
+    pub autogenous: Option<AutogenousLaw>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -150,6 +177,15 @@ pub struct Rock {
     /// Initial temperature gradient, positive = warmer with depth [°C/m], default 0.
     #[serde(default)]
     pub gradient_c_per_m: f64,
+    /// Elastic modulus of the rock [Pa]; required by any mechanical effect when the mesh has rock.
+    #[serde(default)]
+    pub modulus_pa: Option<f64>,
+    /// Poisson's ratio of the rock.
+    #[serde(default)]
+    pub poisson: Option<f64>,
+    /// Thermal expansion of the rock [1/°C] (default: none).
+    #[serde(default)]
+    pub expansion_per_c: Option<f64>,
 }
 
 /// Air temperature Ta = mean + amplitude·cos(2π(d − warmest_day)/365), d = day of year.
@@ -300,12 +336,23 @@ impl Effect {
         )
     }
 
+    /// Is this a mechanical effect (one that needs the stress solve)?
+    pub fn is_mechanical(self) -> bool {
+        !self.is_thermal()
+    }
+
     /// Every effect, in declaration order.
-    pub const ALL: [Effect; 4] = [
+    pub const ALL: [Effect; 10] = [
         Effect::Hydration,
         Effect::PipeCooling,
         Effect::Ambient,
         Effect::ReservoirTemperature,
+        Effect::ThermalStrain,
+        Effect::SelfWeight,
+        Effect::Creep,
+        Effect::Autogenous,
+        Effect::ReservoirLoad,
+        Effect::Joints,
     ];
 
     /// The name used in scene files (`pipe_cooling`).
@@ -315,6 +362,12 @@ impl Effect {
             Effect::PipeCooling => "pipe_cooling",
             Effect::Ambient => "ambient",
             Effect::ReservoirTemperature => "reservoir_temperature",
+            Effect::ThermalStrain => "thermal_strain",
+            Effect::SelfWeight => "self_weight",
+            Effect::Creep => "creep",
+            Effect::Autogenous => "autogenous",
+            Effect::ReservoirLoad => "reservoir_load",
+            Effect::Joints => "joints",
         }
     }
 }
@@ -371,6 +424,11 @@ impl Scene {
     /// Is any thermal effect on (i.e. is there a heat problem to solve)?
     pub fn any_thermal(&self) -> bool {
         self.effects.iter().any(|e| e.is_thermal())
+    }
+
+    /// Does the scene ask for any mechanical effect (and so the stress solve)?
+    pub fn any_mechanical(&self) -> bool {
+        self.effects.iter().any(|e| e.is_mechanical())
     }
 
     /// Lift height \[m\].

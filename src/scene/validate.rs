@@ -37,6 +37,8 @@ pub(super) fn validate(s: &Scene) -> Check {
         ));
     }
 
+    mechanical(s)?;
+
     // Concrete.
     let c = &s.concrete;
     positive("concrete.density_kg_m3", c.density_kg_m3)?;
@@ -421,4 +423,79 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
         ));
     }
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
+}
+
+/// Mechanical inputs: required only by the mechanical effects, always
+/// checked when present.
+fn mechanical(s: &Scene) -> Check {
+    let c = &s.concrete;
+    let need = |what: &str, effect: &str| {
+        SceneError::invalid(
+            format!("concrete.{what}"),
+            format!("effect `{effect}` needs concrete.{what}, which is missing"),
+        )
+    };
+    if let Some(first) = s.effects.iter().find(|e| e.is_mechanical()) {
+        if c.modulus.is_none() {
+            return Err(need("modulus", first.name()));
+        }
+        if c.poisson.is_none() {
+            return Err(need("poisson", first.name()));
+        }
+    }
+    if s.has(Effect::ThermalStrain) && c.expansion_per_c.is_none() {
+        return Err(need("expansion_per_c", "thermal_strain"));
+    }
+    if s.has(Effect::Creep) && c.creep.is_none() {
+        return Err(need("creep", "creep"));
+    }
+    if s.has(Effect::Autogenous) && c.autogenous.is_none() {
+        return Err(need("autogenous", "autogenous"));
+    }
+    if let Some(m) = &c.modulus {
+        m.validate().map_err(|e| SceneError::invalid("concrete.modulus", format!("concrete.modulus.{e}")))?;
+    }
+    if let Some(nu) = c.poisson {
+        poisson_ratio("concrete.poisson", nu)?;
+    }
+    if let Some(a) = c.expansion_per_c {
+        finite("concrete.expansion_per_c", a)?;
+        if !(0.0..1e-3).contains(&a) {
+            return Err(SceneError::invalid(
+                "concrete.expansion_per_c",
+                format!("concrete.expansion_per_c must be in [0, 1e-3) 1/°C, got {a}"),
+            ));
+        }
+    }
+    if let Some(cr) = &c.creep {
+        cr.validate().map_err(|e| SceneError::invalid("concrete.creep", format!("concrete.creep: {e}")))?;
+    }
+    if let Some(g) = &c.autogenous {
+        g.validate().map_err(|e| SceneError::invalid("concrete.autogenous", format!("concrete.autogenous.{e}")))?;
+    }
+    if let Some(r) = &s.rock {
+        if s.any_mechanical() && r.modulus_pa.is_none() {
+            return Err(SceneError::invalid(
+                "rock.modulus_pa",
+                "mechanical effects need rock.modulus_pa, which is missing",
+            ));
+        }
+        if let Some(e) = r.modulus_pa {
+            positive("rock.modulus_pa", e)?;
+        }
+        if let Some(nu) = r.poisson {
+            poisson_ratio("rock.poisson", nu)?;
+        }
+        if let Some(a) = r.expansion_per_c {
+            finite("rock.expansion_per_c", a)?;
+        }
+    }
+    Ok(())
+}
+
+fn poisson_ratio(key: &str, nu: f64) -> Check {
+    if !(nu.is_finite() && (0.0..0.5).contains(&nu)) {
+        return Err(SceneError::invalid(key, format!("{key} must be in [0, 0.5), got {nu}")));
+    }
+    Ok(())
 }

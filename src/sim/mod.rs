@@ -13,6 +13,7 @@ use crate::scene::{Effect, Scene};
 use crate::schedule::Schedules;
 use crate::thermal::boundary::{day_of, AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
+use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
 
 use timeline::{snap, DayEvents, Ladder, Timeline};
@@ -21,6 +22,8 @@ use timeline::{snap, DayEvents, Ladder, Timeline};
 pub enum SimError {
     #[error(transparent)]
     Thermal(#[from] ThermalError),
+    #[error(transparent)]
+    Mechanics(#[from] MechError),
     #[error("the scene has the reservoir_temperature effect but {0} has no reservoir.csv")]
     NoReservoir(String),
     #[error("writing snapshot {path}: {source}")]
@@ -45,6 +48,7 @@ pub struct RunStats {
     pub steps: usize,
     pub pours: usize,
     pub thermal: Option<ThermalStats>,
+    pub mechanics: Option<MechStats>,
     pub seconds: f64,
 }
 
@@ -54,6 +58,9 @@ pub struct Simulation<'a> {
     pub mesh: &'a Mesh,
     pub timeline: Timeline,
     pub thermal: Option<ThermalModel>,
+    pub mechanics: Option<MechanicsModel>,
+    /// reservoir level series (reservoir.csv), when there is one
+    levels: Option<Series>,
     pub day: f64,
     ladder: Ladder,
     pub records: ZoneRecords,
@@ -135,6 +142,12 @@ impl<'a> Simulation<'a> {
         } else {
             None
         };
+        let mechanics = if scene.any_mechanical() {
+            Some(MechanicsModel::new(mesh, scene, &Supports::far_boundary(mesh))?)
+        } else {
+            None
+        };
+        let levels = schedules.reservoir.as_ref().map(|r| Series::from_dated(epoch, r));
         let mut records = ZoneRecords::default();
         records.points = mesh
             .zone_points
@@ -147,6 +160,8 @@ impl<'a> Simulation<'a> {
             ladder: Ladder::new(&scene.time),
             timeline: tl,
             thermal,
+            mechanics,
+            levels,
             day: 0.0,
             records,
             snapshots: Vec::new(),
@@ -173,6 +188,9 @@ impl<'a> Simulation<'a> {
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
                 th.pour(block, lift, self.day, temp);
+            }
+            if let Some(m) = self.mechanics.as_mut() {
+                m.pour(block, lift, self.day);
             }
             self.pours_done += 1;
             restart = true;
@@ -206,8 +224,23 @@ impl<'a> Simulation<'a> {
             let next = self.timeline.next_event_after(self.day);
             let dt = self.ladder.next_step(self.day, next);
             let t1 = snap(self.day + dt);
+            let before = match (&self.thermal, &self.mechanics) {
+                (Some(th), Some(_)) => Some(th.state.temperature.clone()),
+                _ => None,
+            };
             if let Some(th) = self.thermal.as_mut() {
                 th.step(self.day, t1)?;
+            }
+            if let Some(m) = self.mechanics.as_mut() {
+                let level = self.levels.as_ref().and_then(|l| {
+                    let first = l.first_day()?;
+                    (t1 >= first).then(|| l.at(t1.min(l.last_day().unwrap_or(t1)))).flatten()
+                });
+                let temps = match (&before, &self.thermal) {
+                    (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
+                    _ => None,
+                };
+                m.step(self.day, t1, temps, level)?;
             }
             self.day = t1;
             self.steps += 1;
@@ -222,6 +255,7 @@ impl<'a> Simulation<'a> {
             steps: self.steps,
             pours: self.pours_done,
             thermal: self.thermal.as_ref().map(|t| t.stats),
+            mechanics: self.mechanics.as_ref().map(|m| m.stats),
             seconds: start.elapsed().as_secs_f64(),
         })
     }

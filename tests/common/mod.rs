@@ -12,6 +12,11 @@ pub fn date(y: i32, m: u32, d: u32) -> NaiveDate {
 
 /// A scene from TOML text with the given effects and extra tables.
 pub fn scene(effects: &str, geometry: &str, extra: &str) -> Scene {
+    scene_with_concrete(effects, geometry, extra, "")
+}
+
+/// As [`scene`], with extra keys in `[concrete]` (e.g. the mechanical ones).
+pub fn scene_with_concrete(effects: &str, geometry: &str, extra: &str, concrete: &str) -> Scene {
     let text = format!(
         r#"
 name = "test"
@@ -29,6 +34,7 @@ density_kg_m3 = 2400.0
 specific_heat_j_kgk = 950.0
 conductivity_w_mk = 2.2
 adiabatic = {{ form = "exponential", theta0 = 25.0, m = 0.35 }}
+{concrete}
 "#
     );
     Scene::from_toml_str(&text, "test.toml").unwrap_or_else(|e| panic!("{e}"))

@@ -1,0 +1,28 @@
+//! Staged, incremental small-strain mechanics of the dam and its foundation.
+//!
+//! Solved per step n (t_{n−1} → t_n) on the live elements:
+//!
+//!   Σ_e ∫ Bᵀ Δσ dV = Δf_ext      (self-weight at birth, water pressure increments)
+//!   Δσ = Ē_n Q(ν) (B Δu − η_n − α ΔT − ΔG),   Ē_n = E(τ̄)/(1 + E(τ̄) q_n)
+//!
+//! with E(τ) the ageing modulus at the element's mid-step age τ̄, q_n and η_n
+//! Zhu's creep recursion (`material::creep`, state ω_s per Gauss point, no
+//! history), α ΔT the thermal strain increment from the thermal field, ΔG the
+//! autogenous increment. Every element is born stress-free at its pour date:
+//! only displacement increments after birth strain it, so its stress-free
+//! temperature is its own temperature at birth. The rock foundation is
+//! elastic and fixed on its far boundary.
+//!
+//! Because ν is constant, each element's stiffness is Ē_e·K̂_e with K̂_e the
+//! unit-modulus stiffness computed once; the global matrix changes every
+//! step (ageing) and is refactorised numerically on the symbolic analysis of
+//! the live set.
+//!
+//! Verified by `tests/mechanics_staged.rs` (stress-free birth, restrained
+//! thermal stress in the staged driver, relaxation, equilibrium of the
+//! accumulated stresses with the accumulated loads) on top of the element
+//! tests of `fem::elasticity` and the material tests of `material::creep`.
+
+pub mod model;
+
+pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};
