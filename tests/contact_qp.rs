@@ -641,6 +641,7 @@ fn contact_patch_on_incline_reaches_the_limit_together() {
 /// open/closed, tangential pushes random; mostly Coulomb (μ_k = 0.8 μ_s) with
 /// some frictionless and tied points.
 fn random_problem(npts: usize, seed: u64) -> (DMatrix<f64>, Vec<f64>, Vec<FrictionModel>) {
+    let p: Vec<f64> = std::env::var("RP").ok().map(|v| v.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![0.25, -1.0, 0.15, 1.5]);
     let mut rng = Rng(seed);
     let nx = (npts as f64).sqrt().ceil() as usize;
     let xy: Vec<(f64, f64)> = (0..npts)
@@ -651,7 +652,7 @@ fn random_problem(npts: usize, seed: u64) -> (DMatrix<f64>, Vec<f64>, Vec<Fricti
             )
         })
         .collect();
-    let ell = 1.5;
+    let ell = p[3];
     let a = DMatrix::from_fn(npts, npts, |i, j| {
         let d = (xy[i].0 - xy[j].0).hypot(xy[i].1 - xy[j].1);
         (-d / ell).exp()
@@ -665,9 +666,9 @@ fn random_problem(npts: usize, seed: u64) -> (DMatrix<f64>, Vec<f64>, Vec<Fricti
     let mut b = vec![0.0; 3 * npts];
     let mut friction = Vec::with_capacity(npts);
     for i in 0..npts {
-        b[3 * i] = rng.range(-0.6, 0.6) * 1e-3;
-        b[3 * i + 1] = rng.range(-0.6, 0.6) * 1e-3;
-        b[3 * i + 2] = rng.range(-1.0, 0.5) * 1e-3;
+        b[3 * i] = rng.range(-p[0], p[0]) * 1e-3;
+        b[3 * i + 1] = rng.range(-p[0], p[0]) * 1e-3;
+        b[3 * i + 2] = rng.range(p[1], p[2]) * 1e-3;
         let x = rng.uniform();
         friction.push(if x < 0.08 {
             FrictionModel::Frictionless

@@ -296,7 +296,7 @@ fn patch_case(mesh: &Mesh, label: &str, grad: [[f64; 3]; 3], t: [f64; 3]) -> (f6
         .map(|e| gauss_points(&mesh.coords(e)).unwrap())
         .collect();
     let ke: Vec<Mat24> = gps.iter().map(|g| stiffness(g, &d)).collect();
-    let u = solve(&mesh, &ke, &vec![0.0; n], &fixed, &u_fixed);
+    let u = solve(mesh, &ke, &vec![0.0; n], &fixed, &u_fixed);
 
     let mut u_err = 0.0f64;
     let mut u_scale = 0.0f64;

@@ -4,6 +4,8 @@
 //! ageing law against the superposition integral, newborn elements,
 //! telescoping autogenous strain, 3-D consistency, restart equality and the
 //! exact validation messages.
+// Index loops read best where several arrays share the index.
+#![allow(clippy::needless_range_loop)]
 
 use groutready::material::ageing::{mid_step_age, AgeStepError};
 use groutready::material::{
@@ -269,7 +271,7 @@ fn variable_stress_on_ageing_law_converges_second_order() {
             b
         })
         .collect();
-    let mut errs = vec![Vec::new(), Vec::new()];
+    let mut errs = [Vec::new(), Vec::new()];
     for &dt in &DTS {
         let mut st = ScalarCreepState::new(2);
         let c = coefficients(&m, &law, TAU0, TAU0).unwrap();

@@ -144,8 +144,7 @@ pub struct SolidGauss {
 #[inline]
 fn b_matrix(g: &[[f64; 3]; 8]) -> BMatrix {
     let mut b = BMatrix::zeros();
-    for a in 0..8 {
-        let [dx, dy, dz] = g[a];
+    for (a, &[dx, dy, dz]) in g.iter().enumerate() {
         let c = 3 * a;
         b[(0, c)] = dx;
         b[(1, c + 1)] = dy;

@@ -48,12 +48,14 @@ pub struct ContactSettings {
     pub ipm_tolerance: f64,
     /// Interior-point iteration limit per cone program. Default `200`.
     pub ipm_max_iter: u32,
-    /// Accept clarabel's `AlmostSolved` (reduced accuracy) status; the own KKT
-    /// check still applies. Default `false`: any status but `Solved` is a
-    /// [`ContactError::Solver`].
+    /// Accept clarabel's `AlmostSolved` (reduced accuracy) status: the
+    /// answer is still polished and must pass the own KKT check
+    /// (`kkt_tolerance`). With `false` any status but `Solved` is a
+    /// [`ContactError::Solver`]. Default `true`.
     pub accept_almost_solved: bool,
     /// Friction fixed point stops when ‖Δs̃‖∞ ≤ tolerance·(‖s̃‖∞ + 1), s̃ the
-    /// slip bounds in units of [`Scales::force`]. Default `1e-9`.
+    /// slip bounds in units of [`Scales::force`]. Default `1e-7` (about the
+    /// interior-point noise; the polish makes the answer exact).
     pub tolerance: f64,
     /// Maximum number of cone programs in the friction fixed point (all
     /// static/kinetic rounds together). Default `100`.
@@ -74,6 +76,18 @@ pub struct ContactSettings {
     pub kkt_tolerance: f64,
     /// W must be symmetric to this times max|W_ij|. Default `1e-8`.
     pub symmetry_tolerance: f64,
+    /// Polish the interior-point answer: solve the equalities of its active
+    /// set exactly (dense LU), correct violated inequalities (at most
+    /// `polish_max_rounds` rounds) and keep the result when its KKT residual
+    /// is not worse. Also stops the friction fixed point early once two
+    /// successive iterates have the same states and their polished solution
+    /// has a KKT residual ≤ `polish_tolerance`. Default `true`.
+    pub polish: bool,
+    /// KKT residual an early-exit polished solution must reach; also the
+    /// feasibility margin of the polish's switching tests. Default `1e-11`.
+    pub polish_tolerance: f64,
+    /// Active-set rounds of the polish. Default `8`.
+    pub polish_max_rounds: usize,
 }
 
 impl Default for ContactSettings {
@@ -81,14 +95,17 @@ impl Default for ContactSettings {
         Self {
             ipm_tolerance: 1e-10,
             ipm_max_iter: 200,
-            accept_almost_solved: false,
-            tolerance: 1e-9,
+            accept_almost_solved: true,
+            tolerance: 1e-7,
             max_fixed_point: 100,
             relaxation: 1.0,
             open_tolerance: 1e-9,
             slip_tolerance: 1e-7,
             kkt_tolerance: 1e-6,
             symmetry_tolerance: 1e-8,
+            polish: true,
+            polish_tolerance: 1e-11,
+            polish_max_rounds: 8,
         }
     }
 }
@@ -120,6 +137,7 @@ impl ContactSettings {
         nonneg("slip_tolerance", self.slip_tolerance)?;
         positive("kkt_tolerance", self.kkt_tolerance)?;
         nonneg("symmetry_tolerance", self.symmetry_tolerance)?;
+        positive("polish_tolerance", self.polish_tolerance)?;
         if !(self.relaxation.is_finite() && self.relaxation > 0.0 && self.relaxation <= 1.0) {
             return Err(ContactError::Settings(format!(
                 "relaxation must be in (0, 1], got {}",
@@ -272,6 +290,11 @@ fn run(
     }
     let bt: Vec<f64> = b.iter().map(|v| v / beta).collect();
     let to_scaled_force = omega / beta;
+    let unit = Scales {
+        displacement: 1.0,
+        compliance: 1.0,
+        force: 1.0,
+    };
 
     let n = points.len();
     // Current friction coefficient (μ_s, or μ_k once sliding) and bounds s̃.
@@ -290,6 +313,8 @@ fn run(
 
     let mut ipm_iterations = 0usize;
     let mut iteration = 0usize;
+    let mut previous_states: Option<Vec<ContactState>> = None;
+    let mut polished: Option<(Vec<f64>, Vec<ContactState>)> = None;
     let (rt, s_used) = loop {
         iteration += 1;
         let include_t: Vec<bool> = points
@@ -309,6 +334,32 @@ fn run(
         if !friction_iterates {
             break (rt, s);
         }
+        let ut = apply_scaled(w, omega, &bt, &rt);
+        // Early exit: the states repeat and their exact solution checks out.
+        let states = classify(points, &rt, &ut, &s, settings);
+        if settings.polish && previous_states.as_ref() == Some(&states) {
+            if let Some((rp, sp)) = polish(w, omega, &bt, points, &rt, &ut, &states, settings) {
+                let up = apply_scaled(w, omega, &bt, &rp);
+                if std::env::var("DBG_CONTACT").is_ok() {
+                    eprintln!(
+                        "it {iteration} early polish kkt {:?}",
+                        kkt_of(points, &rp, &up, &unit)
+                    );
+                }
+                if kkt_of(points, &rp, &up, &unit).max() <= settings.polish_tolerance {
+                    polished = Some((rp, sp));
+                    break (rt, s);
+                }
+            }
+        }
+        if std::env::var("DBG_CONTACT").is_ok() {
+            eprintln!(
+                "it {iteration} states same {} kkt {:?}",
+                previous_states.as_ref() == Some(&states),
+                kkt_of(points, &rt, &ut, &unit)
+            );
+        }
+        previous_states = Some(states);
         let target: Vec<f64> = (0..n).map(|i| mu[i] * rt[points[i].n].max(0.0)).collect();
         let mut diff = 0.0f64;
         let mut size = 0.0f64;
@@ -319,7 +370,6 @@ fn run(
         let change = diff / (size + 1.0);
         if change <= settings.tolerance {
             // Converged for the current coefficients: do points reach μ_s?
-            let ut = apply_scaled(w, omega, &bt, &rt);
             let mut new_sliders = false;
             for (i, p) in points.iter().enumerate() {
                 let Some((mu_s, mu_k)) = coulomb(p.model) else {
@@ -353,33 +403,39 @@ fn run(
         }
     };
 
-    // Classify, clean the interior-point residue of open points, unscale.
+    // The interior-point answer, cleaned: open points carry no force.
     let ut = apply_scaled(w, omega, &bt, &rt);
+    let states = classify(points, &rt, &ut, &s_used, settings);
     let mut rt = rt;
-    let mut states = Vec::with_capacity(n);
-    for (i, p) in points.iter().enumerate() {
-        let state = if !is_closed(rt[p.n], ut[p.n], settings) {
+    for (p, st) in points.iter().zip(&states) {
+        if *st == ContactState::Open {
             rt[p.n] = 0.0;
             if let (Some([t1, t2]), false) = (p.t, matches!(p.model, FrictionModel::Tied)) {
                 rt[t1] = 0.0;
                 rt[t2] = 0.0;
             }
-            ContactState::Open
-        } else {
-            match p.model {
-                FrictionModel::Frictionless => ContactState::Slip,
-                FrictionModel::Tied => ContactState::Stick,
-                FrictionModel::Coulomb { .. } => {
-                    if at_bound(p, &rt, &ut, s_used[i], settings) {
-                        ContactState::Slip
+        }
+    }
+    let (rt, states) = match polished {
+        Some(x) => x,
+        None if settings.polish => {
+            let ut = apply_scaled(w, omega, &bt, &rt);
+            let k_ipm = kkt_of(points, &rt, &ut, &unit).max();
+            match polish(w, omega, &bt, points, &rt, &ut, &states, settings) {
+                Some((rp, sp)) => {
+                    let up = apply_scaled(w, omega, &bt, &rp);
+                    if kkt_of(points, &rp, &up, &unit).max() <= k_ipm {
+                        (rp, sp)
                     } else {
-                        ContactState::Stick
+                        (rt, states)
                     }
                 }
+                None => (rt, states),
             }
-        };
-        states.push(state);
-    }
+        }
+        None => (rt, states),
+    };
+
     let force = beta / omega;
     let r: Vec<f64> = rt.iter().map(|v| v * force).collect();
     let u = apply(w, b, &r);
@@ -406,6 +462,345 @@ fn run(
         kkt,
         scales,
     })
+}
+
+/// States of an interior-point iterate solved with the bounds `s` (scaled).
+fn classify(
+    points: &[PointRows],
+    rt: &[f64],
+    ut: &[f64],
+    s: &[f64],
+    settings: &ContactSettings,
+) -> Vec<ContactState> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if !is_closed(rt[p.n], ut[p.n], settings) {
+                return ContactState::Open;
+            }
+            match p.model {
+                FrictionModel::Frictionless => ContactState::Slip,
+                FrictionModel::Tied => ContactState::Stick,
+                FrictionModel::Coulomb { .. } => {
+                    if at_bound(p, rt, ut, s[i], settings) {
+                        ContactState::Slip
+                    } else {
+                        ContactState::Stick
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
+/// Active set of one point in the polish.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Active {
+    /// r = 0.
+    Open,
+    /// Tied point with the normal open: r_n = 0, u_t = 0.
+    OpenTied,
+    /// u = 0 on all rows of the point.
+    Stick,
+    /// u_n = 0 and r_t = 0 (frictionless or μ_k = 0).
+    SlipFree,
+    /// u_n = 0, r_t = μ r_n (cos φ, sin φ) with u_t ∥ −(cos φ, sin φ).
+    Slip { mu: f64, phi: f64 },
+}
+
+impl Active {
+    fn state(self) -> ContactState {
+        match self {
+            Active::Open | Active::OpenTied => ContactState::Open,
+            Active::Stick => ContactState::Stick,
+            Active::SlipFree | Active::Slip { .. } => ContactState::Slip,
+        }
+    }
+    /// Unknowns of the point: OpenTied (r_t1, r_t2), Stick (r_t1, r_t2, r_n),
+    /// SlipFree (r_n), Slip (r_n, φ).
+    fn n_unknowns(self) -> usize {
+        match self {
+            Active::Open => 0,
+            Active::SlipFree => 1,
+            Active::OpenTied | Active::Slip { .. } => 2,
+            Active::Stick => 3,
+        }
+    }
+}
+
+/// Polish: Newton's method on the equalities of an active set taken from the
+/// interior-point iterate (stick u = 0; slip u_n = 0, r_t = μ_k r_n d(φ),
+/// u_t × d = 0; open r = 0), then the inequalities are checked and violators
+/// switched (r_n < 0 → open, u_n < 0 → closed, ‖r_t‖ > μ_s r_n → slip,
+/// u_t·d > 0 → stick) for at most `polish_max_rounds` rounds. Returns the
+/// scaled forces and states of the last round, `None` if the Newton systems
+/// fail.
+#[allow(clippy::too_many_arguments)]
+fn polish(
+    w: &DMatrix<f64>,
+    omega: f64,
+    bt: &[f64],
+    points: &[PointRows],
+    rt: &[f64],
+    ut: &[f64],
+    states: &[ContactState],
+    settings: &ContactSettings,
+) -> Option<(Vec<f64>, Vec<ContactState>)> {
+    let tol = settings.polish_tolerance;
+    // Initial active set and unknowns from the iterate.
+    let mut active: Vec<Active> = Vec::with_capacity(points.len());
+    let mut x: Vec<Vec<f64>> = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        let tied = matches!(p.model, FrictionModel::Tied);
+        let a = match (states[i], p.t, p.model) {
+            (ContactState::Open, Some(_), _) if tied => Active::OpenTied,
+            (ContactState::Open, _, _) => Active::Open,
+            (ContactState::Stick, Some(_), _) => Active::Stick,
+            (_, Some([t1, t2]), FrictionModel::Coulomb { mu_k, .. }) if mu_k > 0.0 => {
+                let phi = if rt[t1].hypot(rt[t2]) > 0.0 {
+                    rt[t2].atan2(rt[t1])
+                } else {
+                    (-ut[t2]).atan2(-ut[t1])
+                };
+                Active::Slip { mu: mu_k, phi }
+            }
+            _ => Active::SlipFree,
+        };
+        active.push(a);
+        x.push(initial_unknowns(a, p, rt));
+    }
+    let mut result = None;
+    for _round in 0..settings.polish_max_rounds.max(1) {
+        newton(w, omega, bt, points, &active, &mut x, tol)?;
+        let r_new = forces(points, &active, &x, bt.len());
+        let u_new = apply_scaled(w, omega, bt, &r_new);
+        // Check the inequalities, switch the violators.
+        let mut changed = false;
+        for (i, p) in points.iter().enumerate() {
+            let (rn, un) = (r_new[p.n], u_new[p.n]);
+            let a = active[i];
+            let next = match a {
+                Active::Open | Active::OpenTied => {
+                    if un < -tol {
+                        match (p.model, p.t) {
+                            (FrictionModel::Frictionless, _) | (_, None) => Active::SlipFree,
+                            _ => Active::Stick,
+                        }
+                    } else {
+                        a
+                    }
+                }
+                _ if rn < -tol => {
+                    if a == Active::Stick && matches!(p.model, FrictionModel::Tied) {
+                        Active::OpenTied
+                    } else {
+                        Active::Open
+                    }
+                }
+                Active::Stick => match (p.model, p.t) {
+                    (FrictionModel::Coulomb { mu_s, mu_k }, Some([t1, t2])) => {
+                        let rtn = r_new[t1].hypot(r_new[t2]);
+                        if rtn > mu_s * rn + tol {
+                            if mu_k > 0.0 {
+                                Active::Slip {
+                                    mu: mu_k,
+                                    phi: r_new[t2].atan2(r_new[t1]),
+                                }
+                            } else {
+                                Active::SlipFree
+                            }
+                        } else {
+                            a
+                        }
+                    }
+                    _ => a,
+                },
+                Active::Slip { phi, .. } => {
+                    let Some([t1, t2]) = p.t else { continue };
+                    if u_new[t1] * phi.cos() + u_new[t2] * phi.sin() > tol {
+                        Active::Stick // slipping along the friction force: it sticks
+                    } else {
+                        a
+                    }
+                }
+                Active::SlipFree => a,
+            };
+            if next != a {
+                changed = true;
+                active[i] = next;
+                x[i] = initial_unknowns(next, p, &r_new);
+            }
+        }
+        let st: Vec<ContactState> = active.iter().map(|a| a.state()).collect();
+        let done = !changed;
+        result = Some((r_new, st));
+        if done {
+            break;
+        }
+    }
+    result
+}
+
+fn initial_unknowns(a: Active, p: &PointRows, r: &[f64]) -> Vec<f64> {
+    let rn = r[p.n].max(0.0);
+    match (a, p.t) {
+        (Active::Open, _) => vec![],
+        (Active::OpenTied, Some([t1, t2])) => vec![r[t1], r[t2]],
+        (Active::Stick, Some([t1, t2])) => vec![r[t1], r[t2], rn],
+        (Active::Slip { phi, .. }, _) => vec![rn, phi],
+        (Active::SlipFree, _) => vec![rn],
+        _ => vec![0.0; a.n_unknowns()],
+    }
+}
+
+/// Forces (scaled) of the unknowns.
+fn forces(points: &[PointRows], active: &[Active], x: &[Vec<f64>], m: usize) -> Vec<f64> {
+    let mut r = vec![0.0; m];
+    for ((p, a), xi) in points.iter().zip(active).zip(x) {
+        match (*a, p.t) {
+            (Active::OpenTied, Some([t1, t2])) => {
+                r[t1] = xi[0];
+                r[t2] = xi[1];
+            }
+            (Active::Stick, Some([t1, t2])) => {
+                r[t1] = xi[0];
+                r[t2] = xi[1];
+                r[p.n] = xi[2];
+            }
+            (Active::Slip { mu, .. }, Some([t1, t2])) => {
+                r[p.n] = xi[0];
+                r[t1] = mu * xi[0] * xi[1].cos();
+                r[t2] = mu * xi[0] * xi[1].sin();
+            }
+            (Active::SlipFree, _) => r[p.n] = xi[0],
+            _ => {}
+        }
+    }
+    r
+}
+
+/// Newton's method for the equalities of a fixed active set (dense LU).
+fn newton(
+    w: &DMatrix<f64>,
+    omega: f64,
+    bt: &[f64],
+    points: &[PointRows],
+    active: &[Active],
+    x: &mut [Vec<f64>],
+    tol: f64,
+) -> Option<()> {
+    use faer::prelude::Solve;
+    let m = bt.len();
+    let data = w.as_slice();
+    let inv = 1.0 / omega;
+    // Unknown index → (point, local index); derivative of r w.r.t. it.
+    let mut owner: Vec<(usize, usize)> = Vec::new();
+    for (i, a) in active.iter().enumerate() {
+        for k in 0..a.n_unknowns() {
+            owner.push((i, k));
+        }
+    }
+    let nz = owner.len();
+    if nz == 0 {
+        return Some(());
+    }
+    let dr = |i: usize, k: usize, xi: &[f64]| -> Vec<(usize, f64)> {
+        let p = &points[i];
+        match (active[i], p.t) {
+            (Active::OpenTied, Some(t)) => vec![(t[k], 1.0)],
+            (Active::Stick, Some([t1, t2])) => vec![([t1, t2, p.n][k], 1.0)],
+            (Active::Slip { mu, .. }, Some([t1, t2])) => {
+                let (c, s) = (xi[1].cos(), xi[1].sin());
+                if k == 0 {
+                    vec![(p.n, 1.0), (t1, mu * c), (t2, mu * s)]
+                } else {
+                    vec![(t1, -mu * xi[0] * s), (t2, mu * xi[0] * c)]
+                }
+            }
+            _ => vec![(p.n, 1.0)],
+        }
+    };
+    let mut last = f64::INFINITY;
+    for _ in 0..30 {
+        let r = forces(points, active, x, m);
+        let u = apply_scaled(w, omega, bt, &r);
+        // Residual rows: (kind, point); kind 0 = u row, 1 = slip alignment.
+        let mut rows: Vec<(usize, usize, usize)> = Vec::with_capacity(nz); // (point, row, kind)
+        let mut f: Vec<f64> = Vec::with_capacity(nz);
+        for (i, (p, a)) in points.iter().zip(active).enumerate() {
+            match (*a, p.t) {
+                (Active::OpenTied, Some([t1, t2])) => {
+                    for row in [t1, t2] {
+                        rows.push((i, row, 0));
+                        f.push(u[row]);
+                    }
+                }
+                (Active::Stick, Some([t1, t2])) => {
+                    for row in [t1, t2, p.n] {
+                        rows.push((i, row, 0));
+                        f.push(u[row]);
+                    }
+                }
+                (Active::Slip { .. }, Some([t1, t2])) => {
+                    rows.push((i, p.n, 0));
+                    f.push(u[p.n]);
+                    let phi = x[i][1];
+                    rows.push((i, t1, 1));
+                    f.push(u[t1] * phi.sin() - u[t2] * phi.cos());
+                    let _ = t2;
+                }
+                (Active::Open, _) => {}
+                _ => {
+                    rows.push((i, p.n, 0));
+                    f.push(u[p.n]);
+                }
+            }
+        }
+        let norm = f.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if !norm.is_finite() {
+            return None;
+        }
+        if norm <= 1e-3 * tol || (norm >= 0.5 * last && norm <= tol) {
+            return Some(());
+        }
+        last = norm;
+        // Jacobian.
+        let cols: Vec<Vec<(usize, f64)>> = owner.iter().map(|&(i, k)| dr(i, k, &x[i])).collect();
+        let jac = faer::Mat::<f64>::from_fn(nz, nz, |e, z| {
+            let (i, row, kind) = rows[e];
+            let wu = |rr: usize| -> f64 {
+                cols[z]
+                    .iter()
+                    .map(|&(c, v)| v * data[c * m + rr])
+                    .sum::<f64>()
+                    * inv
+            };
+            if kind == 0 {
+                wu(row)
+            } else {
+                let p = &points[i];
+                let Some([t1, t2]) = p.t else { return 0.0 };
+                let phi = x[i][1];
+                let (c, s) = (phi.cos(), phi.sin());
+                let mut v = s * wu(t1) - c * wu(t2);
+                if owner[z] == (i, 1) {
+                    v += u[t1] * c + u[t2] * s;
+                }
+                v
+            }
+        });
+        let mut rhs = faer::Mat::<f64>::from_fn(nz, 1, |e, _| -f[e]);
+        jac.partial_piv_lu().solve_in_place(&mut rhs);
+        for (z, &(i, k)) in owner.iter().enumerate() {
+            let d = rhs[(z, 0)];
+            if !d.is_finite() {
+                return None;
+            }
+            x[i][k] += d;
+        }
+    }
+    Some(())
 }
 
 /// Closed when the force is the larger member of the complementary pair

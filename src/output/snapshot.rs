@@ -14,7 +14,7 @@ pub fn write(path: &Path, sim: &Simulation<'_>) -> io::Result<()> {
             .collect(),
         None => (0..mesh.elements.len() as u32).collect(),
     };
-    let temperature = match &sim.thermal {
+    let temperature: Vec<f64> = match &sim.thermal {
         Some(th) => th.nodal_field(mesh),
         None => vec![f64::NAN; mesh.nodes.len()],
     };
@@ -34,11 +34,26 @@ pub fn write(path: &Path, sim: &Simulation<'_>) -> io::Result<()> {
             Part::Rock => 0.0,
         })
         .collect();
-    vtu::write_vtu(
-        path,
-        mesh,
-        &[("temperature_c", temperature.as_slice())],
-        &[("block", block.as_slice()), ("lift", lift.as_slice())],
-        Some(&live),
-    )
+    let mut point_fields: Vec<(String, Vec<f64>)> = vec![("temperature_c".into(), temperature)];
+    let mut cell_fields: Vec<(String, Vec<f64>)> = vec![("block".into(), block), ("lift".into(), lift)];
+    if let Some(m) = &sim.mechanics {
+        for (c, name) in ["ux_m", "uy_m", "uz_m"].iter().enumerate() {
+            point_fields.push((name.to_string(), (0..mesh.nodes.len()).map(|i| m.state.u[3 * i + c]).collect()));
+        }
+        // Element means of the Gauss-point stresses, in MPa as engineers read them.
+        let mean = |e: usize, k: usize| m.state.stress[e].iter().map(|g| g[k]).sum::<f64>() / 8.0 * 1e-6;
+        for (k, name) in ["sxx_mpa", "syy_mpa", "szz_mpa", "sxy_mpa", "syz_mpa", "szx_mpa"].iter().enumerate() {
+            cell_fields.push((name.to_string(), (0..mesh.elements.len()).map(|e| mean(e, k)).collect()));
+        }
+        let vm = (0..mesh.elements.len())
+            .map(|e| {
+                let s: [f64; 6] = std::array::from_fn(|k| mean(e, k));
+                crate::fem::von_mises(&s)
+            })
+            .collect();
+        cell_fields.push(("von_mises_mpa".into(), vm));
+    }
+    let pf: Vec<(&str, &[f64])> = point_fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    let cf: Vec<(&str, &[f64])> = cell_fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    vtu::write_vtu(path, mesh, &pf, &cf, Some(&live))
 }
