@@ -3,7 +3,7 @@
 //! # Equations
 //!
 //! Static equilibrium of a linear elastic solid with an initial (eigen)
-//! strain ε0 (thermal α·ΔT·[1,1,1,0,0,0], autogenous, creep increments):
+//! strain ε0 (thermal α·ΔT·(1, 1, 1, 0, 0, 0), autogenous, creep increments):
 //!
 //! ```text
 //! ∇·σ + b = 0   in Ω,        σ = D (ε − ε0),        ε = ½(∇u + ∇uᵀ)

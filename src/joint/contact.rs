@@ -219,6 +219,10 @@ pub struct ContactSolution {
     pub fixed_point_iterations: usize,
     /// Interior-point iterations summed over the cone programs.
     pub ipm_iterations: usize,
+    /// Wall time in clarabel (setup + solve of every cone program), s.
+    pub cone_seconds: f64,
+    /// Wall time in the polish (Newton / active-set rounds), s.
+    pub polish_seconds: f64,
     /// `kkt.max()`, relative.
     pub kkt_residual: f64,
     /// The KKT residual by component, recomputed from `r` and `u`.

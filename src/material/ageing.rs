@@ -4,7 +4,7 @@
 //!
 //! | law | formula | typical |
 //! |---|---|---|
-//! | [`ModulusLaw`] | E(τ) = E0 (1 − e^{−a τ^b}) | a ≈ 0.40, b ≈ 0.34, E0 = final modulus [Pa] |
+//! | [`ModulusLaw`] | E(τ) = E0 (1 − e^{−a τ^b}) | a ≈ 0.40, b ≈ 0.34, E0 = final modulus \[Pa\] |
 //! | [`AutogenousLaw`] | G(τ) = ε∞ (1 − e^{−c τ^d}) | ε∞ from −50e-6 (shrinkage) to +50e-6 (expansion) |
 //! | [`Poisson`] | ν, constant in time | 0.167 for dam concrete |
 //!
@@ -36,7 +36,7 @@
 //!
 //! # The Poisson matrix Q
 //!
-//! Voigt order [xx, yy, zz, xy, yz, zx] with **engineering** shear strains
+//! Voigt order \[xx, yy, zz, xy, yz, zx\] with **engineering** shear strains
 //! (γ_xy = 2ε_xy). The isotropic elastic law is ε = Q⁻¹σ / E with
 //!
 //! ```text
@@ -48,7 +48,7 @@
 //!        ⎣                        2(1+ν)⎦
 //! ```
 //!
-//! and σ = E Q ε, Q = 1/((1+ν)(1−2ν)) · [[1−ν, ν, ν], [ν, 1−ν, ν], [ν, ν, 1−ν]]
+//! and σ = E Q ε, Q = 1/((1+ν)(1−2ν)) · `[[1−ν, ν, ν], [ν, 1−ν, ν], [ν, ν, 1−ν]]`
 //! on the normal block and 1/(2(1+ν)) on the shear diagonal. The creep
 //! strain uses the same Q⁻¹ (a creep Poisson ratio equal to the elastic one).
 //!
@@ -81,7 +81,7 @@ pub enum AgeStepError {
     NewbornInstant,
 }
 
-/// Mid-step age τ½ = (τ0 + τ1)/2 of a step from age τ0 to τ1 [days].
+/// Mid-step age τ½ = (τ0 + τ1)/2 of a step from age τ0 to τ1 \[days\].
 ///
 /// Guaranteed > 0 and finite on success: steps of positive length from
 /// τ0 ≥ 0, and zero-length steps at τ0 > 0 (instantaneous loads). Errors are
@@ -104,11 +104,11 @@ pub fn mid_step_age(age0: f64, age1: f64) -> Result<f64, AgeStepError> {
     }
 }
 
-/// Something that gives the elastic modulus [Pa] at an age [days]: the
+/// Something that gives the elastic modulus \[Pa\] at an age \[days\]: the
 /// ageing [`ModulusLaw`], or a plain `f64` for a non-ageing (constant)
 /// modulus. Used by [`super::creep::coefficients`].
 pub trait ModulusOfAge {
-    /// E(τ) [Pa].
+    /// E(τ) \[Pa\].
     fn modulus_at(&self, age: f64) -> f64;
 }
 
@@ -125,16 +125,16 @@ impl ModulusOfAge for f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModulusLaw {
-    /// Final modulus E0 [Pa] (the limit for τ → ∞).
+    /// Final modulus E0 \[Pa\] (the limit for τ → ∞).
     pub e0_pa: f64,
-    /// a [day^−b], typically 0.40.
+    /// a \[day^−b\], typically 0.40.
     pub a: f64,
-    /// b [−], typically 0.34.
+    /// b \[−\], typically 0.34.
     pub b: f64,
 }
 
 impl ModulusLaw {
-    /// E(τ) [Pa]; 0 for τ ≤ 0 (not yet poured), strictly increasing for
+    /// E(τ) \[Pa\]; 0 for τ ≤ 0 (not yet poured), strictly increasing for
     /// τ > 0 and below E0. Evaluated with `expm1`, so small ages keep their
     /// relative precision.
     pub fn modulus(&self, age: f64) -> f64 {
@@ -147,7 +147,7 @@ impl ModulusLaw {
         -self.e0_pa * (-self.a * age.powf(self.b)).exp_m1()
     }
 
-    /// E(τ½) [Pa] at the mid-step age of a step from τ0 to τ1 (see
+    /// E(τ½) \[Pa\] at the mid-step age of a step from τ0 to τ1 (see
     /// [`mid_step_age`]). For a valid law the result is > 0 whenever it is
     /// `Ok`: a newborn step (τ0 = 0, τ1 > 0) gives E(τ1/2) > 0; a
     /// zero-length step at age 0 is an error.
@@ -155,7 +155,7 @@ impl ModulusLaw {
         Ok(self.modulus(mid_step_age(age0, age1)?))
     }
 
-    /// Final modulus E0 [Pa].
+    /// Final modulus E0 \[Pa\].
     pub fn final_modulus(&self) -> f64 {
         self.e0_pa
     }
@@ -185,16 +185,16 @@ impl ModulusOfAge for ModulusLaw {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AutogenousLaw {
-    /// Final autogenous strain ε∞ [−], negative for shrinkage.
+    /// Final autogenous strain ε∞ \[−\], negative for shrinkage.
     pub eps_inf: f64,
-    /// c [day^−d].
+    /// c \[day^−d\].
     pub c: f64,
-    /// d [−].
+    /// d \[−\].
     pub d: f64,
 }
 
 impl AutogenousLaw {
-    /// G(τ) [−]; 0 for τ ≤ 0.
+    /// G(τ) \[−\]; 0 for τ ≤ 0.
     pub fn strain(&self, age: f64) -> f64 {
         if age.is_nan() {
             return f64::NAN;

@@ -13,7 +13,7 @@
 //! [`CreepTerm`]). E(τ) is an [`ModulusOfAge`], usually
 //! [`super::ageing::ModulusLaw`]. In 3-D both parts share the Poisson matrix:
 //! ε = Q⁻¹σ/E(τ) + Q⁻¹σ C(t, τ) (see [`super::ageing`] for Q, Voigt
-//! [xx, yy, zz, xy, yz, zx], engineering shear).
+//! \[xx, yy, zz, xy, yz, zx\], engineering shear).
 //!
 //! [`CreepLaw::zhu_typical`] gives Zhu's commonly quoted mass-concrete law
 //! (two terms; see its docs for the numbers and the source).
@@ -71,7 +71,7 @@
 //! # Verification (`tests/material_creep.rs`)
 //!
 //! * Relaxation of a non-ageing material (DESIGN §7):
-//!   σ/ε0 = E/(1+φ)[1 + φ e^{−(1+φ) r t}]; the error at t = 1 d and 5 d falls
+//!   σ/ε0 = E/(1+φ)\[1 + φ e^{−(1+φ) r t}\]; the error at t = 1 d and 5 d falls
 //!   as Δt² (least-squares log–log slope) for Δt from 0.2 d down to 0.00625 d.
 //! * Constant stress with Zhu's ageing law: ε = σ/E(τ0) + σ C(t, τ0) to
 //!   rounding (the recursion is exact for jumps at step boundaries), and a
@@ -92,18 +92,18 @@ use super::ageing::{mid_step_age, positive, AgeStepError, ModulusOfAge, Poisson}
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CreepTerm {
-    /// f [1/Pa], the non-ageing part of the final creep of this term.
+    /// f \[1/Pa\], the non-ageing part of the final creep of this term.
     pub f: f64,
-    /// g [1/Pa · day^p], the ageing part.
+    /// g \[1/Pa · day^p\], the ageing part.
     pub g: f64,
-    /// p [−], the ageing exponent.
+    /// p \[−\], the ageing exponent.
     pub p: f64,
-    /// r [1/day], the rate of this term.
+    /// r \[1/day\], the rate of this term.
     pub r: f64,
 }
 
 impl CreepTerm {
-    /// ψ(τ) = f + g τ^{−p} [1/Pa], the final creep of a unit stress applied
+    /// ψ(τ) = f + g τ^{−p} \[1/Pa\], the final creep of a unit stress applied
     /// at age τ. Infinite at τ = 0 when g > 0 and p > 0.
     pub fn psi(&self, load_age: f64) -> f64 {
         if self.g == 0.0 {
@@ -116,7 +116,7 @@ impl CreepTerm {
 
 /// Zhu Bofang's creep compliance C(t, τ) = Σ_s (f_s + g_s τ^{−p_s})(1 − e^{−r_s(t − τ)}).
 ///
-/// Scene input: `terms = [{ f = 6.6e-12, g = 6.0e-11, p = 0.45, r = 0.30 }, ...]`.
+/// Scene input: `terms = \[{ f = 6.6e-12, g = 6.0e-11, p = 0.45, r = 0.30 }, ...\]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CreepLaw {
@@ -161,7 +161,7 @@ impl CreepLaw {
     }
 
     /// The non-ageing one-term law C = (φ/E)(1 − e^{−r(t−τ)}) of the
-    /// relaxation check (DESIGN §7): creep coefficient φ, rate r [1/day].
+    /// relaxation check (DESIGN §7): creep coefficient φ, rate r \[1/day\].
     pub fn non_ageing(phi: f64, r: f64, e_pa: f64) -> Self {
         CreepLaw {
             terms: vec![CreepTerm {
@@ -178,7 +178,7 @@ impl CreepLaw {
         self.terms.len()
     }
 
-    /// C(t, τ) [1/Pa] for observation age t and loading age τ (both days of
+    /// C(t, τ) \[1/Pa\] for observation age t and loading age τ (both days of
     /// concrete age); 0 for t ≤ τ. τ must be > 0 when some g_s ≠ 0.
     pub fn compliance(&self, age_t: f64, load_age: f64) -> f64 {
         let dur = age_t - load_age;
@@ -191,14 +191,14 @@ impl CreepLaw {
             .sum()
     }
 
-    /// Final creep Σ_s ψ_s(τ) = C(∞, τ) [1/Pa] of a load applied at age τ.
+    /// Final creep Σ_s ψ_s(τ) = C(∞, τ) \[1/Pa\] of a load applied at age τ.
     pub fn final_compliance(&self, load_age: f64) -> f64 {
         self.terms.iter().map(|t| t.psi(load_age)).sum()
     }
 
     /// Checks the parameters; the error names the offending field with its
-    /// 0-based index, e.g. `terms[1].r must be > 0, got 0` or
-    /// `terms[0].f must be in [0, 1e-6) 1/Pa, got 0.23` (a coefficient not
+    /// 0-based index, e.g. `terms\[1\].r must be > 0, got 0` or
+    /// `terms\[0\].f must be in [0, 1e-6) 1/Pa, got 0.23` (a coefficient not
     /// divided by E).
     pub fn validate(&self) -> Result<(), String> {
         if self.terms.is_empty() {
@@ -225,19 +225,19 @@ impl CreepLaw {
 /// on the Gauss point. Built by [`coefficients`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepCoefficients {
-    /// Age at the step's start τ_{n−1} [days].
+    /// Age at the step's start τ_{n−1} \[days\].
     pub age0: f64,
-    /// Age at the step's end τ_n [days].
+    /// Age at the step's end τ_n \[days\].
     pub age1: f64,
-    /// Δt = τ_n − τ_{n−1} [days] (≥ 0).
+    /// Δt = τ_n − τ_{n−1} \[days\] (≥ 0).
     pub dt: f64,
-    /// Mid-step age τ̄ = (τ_{n−1} + τ_n)/2 > 0 [days].
+    /// Mid-step age τ̄ = (τ_{n−1} + τ_n)/2 > 0 \[days\].
     pub mid_age: f64,
-    /// E(τ̄) [Pa], the elastic modulus of the step.
+    /// E(τ̄) \[Pa\], the elastic modulus of the step.
     pub e_mid: f64,
-    /// q = C(τ_n, τ̄) [1/Pa], creep of the step's own stress increment.
+    /// q = C(τ_n, τ̄) \[1/Pa\], creep of the step's own stress increment.
     pub q: f64,
-    /// Ē = E(τ̄)/(1 + E(τ̄) q) [Pa], the effective modulus of the step.
+    /// Ē = E(τ̄)/(1 + E(τ̄) q) \[Pa\], the effective modulus of the step.
     pub e_eff: f64,
     /// Per term: 1 − e^{−r_s Δt}, the weights of ω_s in η.
     pub release: Vec<f64>,
@@ -254,7 +254,7 @@ impl StepCoefficients {
         self.release.len()
     }
 
-    /// Δσ = Ē Q (Δε_net − η) [Pa], where Δε_net = Δε − Δε^T − Δε^0 is the
+    /// Δσ = Ē Q (Δε_net − η) \[Pa\], where Δε_net = Δε − Δε^T − Δε^0 is the
     /// step's total strain increment minus its free (thermal, autogenous)
     /// strains and η = [`eta`] of the Gauss point.
     pub fn stress_increment(&self, nu: Poisson, deps_net: &[f64; 6], eta: &[f64; 6]) -> [f64; 6] {
