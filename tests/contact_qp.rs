@@ -951,3 +951,57 @@ fn time_sizes(sizes: &[usize]) {
         }
     }
 }
+
+#[test]
+fn stiffness_contrast_and_tiny_apertures() {
+    // DESIGN §7 hard cases: compliances spread over 1e6 between points (stiff
+    // old concrete next to newborn) and free gaps down to 1e-6 of the largest.
+    for seed in [21u64, 22] {
+        let (w, mut b, fr) = random_problem(60, seed);
+        let mut rng = Rng(seed * 7);
+        let d: Vec<f64> = (0..60).map(|_| 10f64.powf(rng.range(0.0, 3.0))).collect();
+        let w = DMatrix::from_fn(180, 180, |i, j| d[i / 3] * w[(i, j)] * d[j / 3]);
+        for i in 0..60 {
+            for k in 0..3 {
+                b[3 * i + k] *= d[i];
+            }
+            if i % 7 == 0 {
+                b[3 * i + 2] = 1e-6 * 1e-3 * rng.range(-1.0, 1.0);
+            }
+        }
+        let problem = ContactProblem::new(&w, &b, &fr);
+        let s = solve(&problem, &ContactSettings::default(), None)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let count = |st| s.states.iter().filter(|&&x| x == st).count();
+        eprintln!(
+            "contrast seed {seed}: open {} stick {} slip {}, {} cone programs, kkt {:.2e}",
+            count(ContactState::Open),
+            count(ContactState::Stick),
+            count(ContactState::Slip),
+            s.fixed_point_iterations,
+            s.kkt_residual
+        );
+        assert!(s.kkt_residual <= 1e-8, "seed {seed}: {:?}", s.kkt);
+        check_states(&s, &fr, &format!("contrast seed {seed}"));
+    }
+}
+
+#[test]
+fn rigid_tangential_rows_are_handled() {
+    // A 1-D model condensed to 3 rows: no tangential compliance (W_tt = 0).
+    let k = 2.0e9;
+    let delta = 1.0e-4;
+    let w = DMatrix::from_diagonal(&DVector::from_vec(vec![0.0, 0.0, 1.0 / k]));
+    let b = [0.0, 0.0, -delta];
+    for fr in [FrictionModel::coulomb(0.5), FrictionModel::Frictionless] {
+        let s = solve_default(&w, &b, &[fr]);
+        assert!(rel(s.r[2], k * delta) <= 1e-9, "{fr:?}: {:?}", s.r);
+        assert!(
+            s.r[0].abs() + s.r[1].abs() <= 1e-9 * s.r[2],
+            "{fr:?}: {:?}",
+            s.r
+        );
+        assert!(s.states[0].is_closed());
+        assert!(s.kkt_residual <= 1e-9);
+    }
+}

@@ -1,38 +1,53 @@
 //! `qp`: the condensed contact problem as a sequence of convex cone programs
-//! solved by clarabel (Tresca fixed point for Coulomb friction).
+//! solved by clarabel (Tresca fixed point for Coulomb friction), polished to
+//! round-off by Newton's method on the identified active set.
 //!
-//! Each cone program, in the scaled variables of the module doc
-//! ([`super`]), is
+//! Each cone program, in scaled variables, is
 //!
 //! ```text
-//! min ½ r̃ᵀ W̃ r̃ + b̃ᵀ r̃   s.t.  r̃_n,i ≥ 0                  (nonnegative cone)
-//!                             (s̃_i, r̃_t,i) ∈ SOC(3)       (Coulomb points with a bound s̃_i > 0)
-//!                             r̃_t,i = 0                    (frictionless points, Coulomb points with s̃_i = 0:
-//!                                                           the variables are left out)
-//!                             r̃_t,i free                   (tied points: u_t = 0 is the optimality condition)
+//! min ½ r̃ᵀ W̃ r̃ + b̃ᵀ r̃   s.t.  r̃_n,i ≥ 0              (one nonnegative cone for all normals)
+//!                             (s̃_i, r̃_t,i) ∈ SOC(3)   (Coulomb points with a bound s̃_i > 0)
+//!                             r̃_t,i = 0                (frictionless points, and Coulomb points
+//!                                                       with s̃_i = 0: the variables are left out)
+//!                             r̃_t,i free               (tied points: u_t = 0 is then the
+//!                                                       optimality condition)
 //! ```
 //!
 //! with W̃ = sym(W)/ω, b̃ = b/β, r = r̃ β/ω (ω = mean diagonal of W,
 //! β = max|b|), so every tolerance is relative and the answer does not depend
 //! on the units. Only the upper triangle of W̃ over the kept variables is
-//! passed to clarabel.
+//! passed to clarabel (dense: its KKT factorisation costs O((3n)³) per
+//! interior-point iteration with the default QDLDL).
 //!
 //! Friction (static μ_s, kinetic μ_k): the fixed point s̃_i ← μ_i r̃_n,i runs
 //! with μ_i = μ_s for every point until ‖Δs̃‖∞ ≤ tolerance·(‖s̃‖∞ + 1). Points
 //! then found closed with the tangential force on the μ_s bound start to slide:
 //! their coefficient becomes μ_k and the fixed point continues; this repeats
-//! until no new point reaches its static bound (the sliding set only grows, so
-//! there are at most n rounds; every cone program counts against
-//! `max_fixed_point`). A warm start gives the initial bounds s̃_i = μ_s r_n,i.
+//! until no new point reaches its static bound (the sliding set only grows;
+//! every cone program counts against `max_fixed_point`). A warm start gives
+//! the initial bounds s̃_i = μ_s r_n,i. The first program (all bounds 0) is
+//! the normal-only QP.
+//!
+//! Polish. An interior point resolves the slip directions only to ~1e-6, so
+//! the states of the last iterate (open / stick / slip) define equalities —
+//! open r = 0; stick u = 0; slip u_n = 0, r_t = μ_k r_n (cos φ, sin φ) with
+//! u_t ∥ −(cos φ, sin φ) — solved by Newton's method (dense LU, faer); violated
+//! inequalities switch the point's state (r_n < 0 → open, u_n < 0 → closed,
+//! ‖r_t‖ > μ_s r_n → slip, slip along the friction force → stick) for a few
+//! rounds. The polished answer replaces the interior-point one when its KKT
+//! residual is not larger. It also ends the fixed point early: when two
+//! successive iterates have the same states (and, if some μ_k < μ_s, the bounds
+//! are within `early_exit_change` of μ r_n) and their polished solution has a
+//! KKT residual ≤ `polish_tolerance`, that solution satisfies every contact
+//! condition and s = μ r_n exactly, i.e. it is the fixed point.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
     SupportedConeT::{NonnegativeConeT, SecondOrderConeT},
 };
-use std::time::Instant;
-
 use nalgebra::DMatrix;
+use std::time::Instant;
 
 use super::contact::{
     apply, check_dims, kkt_of, max_abs, mean_diagonal, point_rows_3d, point_rows_normal, scales_of,
@@ -753,6 +768,7 @@ fn newton(
         }
     };
     let mut last = f64::INFINITY;
+    let mut slow = 0usize;
     for _ in 0..30 {
         let r = forces(points, active, x, m);
         let u = apply_scaled(w, omega, bt, &r);
@@ -794,6 +810,14 @@ fn newton(
         }
         if norm <= 1e-3 * tol || (norm >= 0.5 * last && norm <= tol) {
             return Some(());
+        }
+        if norm >= 0.5 * last {
+            // not converging quadratically: stop after a few such steps and
+            // let the caller's KKT comparison judge the iterate
+            slow += 1;
+            if slow >= 3 {
+                return Some(());
+            }
         }
         last = norm;
         // Jacobian.
