@@ -9,7 +9,8 @@ use groutready::mesh::Mesh;
 use groutready::thermal::boundary::AirTemperature;
 use groutready::thermal::ThermalModel;
 
-const MECH: &str = "modulus = { e0_pa = 3.0e10, a = 0.40, b = 0.34 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
+const MECH: &str =
+    "modulus = { e0_pa = 3.0e10, a = 0.40, b = 0.34 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
 
 fn mech_scene(effects: &str, geometry: &str, extra: &str) -> groutready::scene::Scene {
     scene_with_concrete(effects, geometry, extra, MECH)
@@ -44,8 +45,13 @@ fn rollers(mesh: &Mesh, sides: bool, bottom: bool, top: bool) -> Supports {
 
 #[test]
 fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
-    let extra = "[air]\nmean_c = 27.0\namplitude_c = 0.0\nwarmest_day_of_year = 200.0\nfilm_w_m2k = 10.0\n";
-    let sc = mech_scene("\"ambient\", \"thermal_strain\"", &blocks_geometry(1, 6.0, 4.0, 3, 2, 2), extra);
+    let extra =
+        "[air]\nmean_c = 27.0\namplitude_c = 0.0\nwarmest_day_of_year = 200.0\nfilm_w_m2k = 10.0\n";
+    let sc = mech_scene(
+        "\"ambient\", \"thermal_strain\"",
+        &blocks_geometry(1, 6.0, 4.0, 3, 2, 2),
+        extra,
+    );
     let mesh = blocks_mesh(&sc);
     let air = AirTemperature::new(sc.epoch, sc.air.clone().unwrap(), None);
     let mut th = ThermalModel::new(&mesh, &sc, vec![], Some(air), None).unwrap();
@@ -58,18 +64,33 @@ fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
         for _ in 0..4 {
             let before = th.state.temperature.clone();
             th.step(t, t + 1.0).unwrap();
-            m.step(t, t + 1.0, Some((&before, &th.state.temperature)), None).unwrap();
+            m.step(t, t + 1.0, Some((&before, &th.state.temperature)), None)
+                .unwrap();
             t += 1.0;
         }
     }
-    let worst = m.state.stress.iter().flatten().flatten().map(|s| s.abs()).fold(0.0, f64::max);
-    assert!(worst < 1e-6, "a stress of {worst} Pa in concrete placed at the ambient temperature");
+    let worst = m
+        .state
+        .stress
+        .iter()
+        .flatten()
+        .flatten()
+        .map(|s| s.abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-6,
+        "a stress of {worst} Pa in concrete placed at the ambient temperature"
+    );
     assert!(m.state.u.iter().all(|u| u.abs() < 1e-15));
 }
 
 #[test]
 fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
-    let sc = mech_scene("\"self_weight\"", &blocks_geometry(1, 6.0, 4.0, 5, 2, 2), "");
+    let sc = mech_scene(
+        "\"self_weight\"",
+        &blocks_geometry(1, 6.0, 4.0, 5, 2, 2),
+        "",
+    );
     let mesh = blocks_mesh(&sc);
     let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, false)).unwrap();
     let mut t = 0.0;
@@ -84,12 +105,18 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
     let rho_g = sc.concrete.density_kg_m3 * 9.81;
     let mut worst: f64 = 0.0;
     for (e, s) in m.state.stress.iter().enumerate() {
-        let zc = (0..8).map(|k| mesh.nodes[mesh.elements[e][k] as usize][2]).sum::<f64>() / 8.0;
+        let zc = (0..8)
+            .map(|k| mesh.nodes[mesh.elements[e][k] as usize][2])
+            .sum::<f64>()
+            / 8.0;
         let mean_szz = s.iter().map(|g| g[2]).sum::<f64>() / 8.0;
         let exact = -rho_g * (top - zc);
         worst = worst.max((mean_szz - exact).abs() / (rho_g * top));
     }
-    eprintln!("column: worst relative σzz error {worst:.2e}, equilibrium {:.2e}", m.equilibrium_residual());
+    eprintln!(
+        "column: worst relative σzz error {worst:.2e}, equilibrium {:.2e}",
+        m.equilibrium_residual()
+    );
     assert!(worst < 1e-10, "σzz off by {worst:.2e} relative");
     assert!(m.equilibrium_residual() < 1e-10);
 }
@@ -98,11 +125,18 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
 /// σ = −α/(1−2ν) ∫ E(τ) dθ(τ); the staged driver integrates with E at
 /// mid-step ages (second order).
 fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64) {
-    let mut sc = mech_scene("\"hydration\", \"thermal_strain\"", &blocks_geometry(1, 6.0, 4.0, 1, 2, 2), "");
+    let mut sc = mech_scene(
+        "\"hydration\", \"thermal_strain\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
+        "",
+    );
     if let Some(m) = sc.concrete.modulus.as_mut() {
         m.b = b_exponent;
     }
-    let rise = AdiabaticRise::Exponential { theta0: 25.0, m: 0.35 };
+    let rise = AdiabaticRise::Exponential {
+        theta0: 25.0,
+        m: 0.35,
+    };
     sc.concrete.adiabatic = Some(rise.clone());
     let mesh = blocks_mesh(&sc);
     let mut th = ThermalModel::new(&mesh, &sc, vec![], None, None).unwrap();
@@ -114,7 +148,8 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
         let (t0, t1) = (k as f64 * dt, (k + 1) as f64 * dt);
         let before = th.state.temperature.clone();
         th.step(t0, t1).unwrap();
-        m.step(t0, t1, Some((&before, &th.state.temperature)), None).unwrap();
+        m.step(t0, t1, Some((&before, &th.state.temperature)), None)
+            .unwrap();
     }
     let modulus = sc.concrete.modulus.unwrap();
     let (alpha, nu) = (1.0e-5, 0.2);
@@ -143,7 +178,10 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
             }
         }
     }
-    assert!(worst_dev < 1e-6 * exact.abs(), "stress not uniform and hydrostatic: {worst_dev}");
+    assert!(
+        worst_dev < 1e-6 * exact.abs(),
+        "stress not uniform and hydrostatic: {worst_dev}"
+    );
     (s[0][0][0], exact)
 }
 
@@ -165,9 +203,15 @@ fn restrained_rate(b_exponent: f64) -> (f64, Vec<f64>, f64) {
 #[test]
 fn restrained_block_under_hydration_converges_at_second_order_for_a_smooth_modulus() {
     let (slope, errs, exact) = restrained_rate(1.0);
-    assert!((slope - 2.0).abs() < 0.15, "rate {slope:.3}, errors {errs:?}");
+    assert!(
+        (slope - 2.0).abs() < 0.15,
+        "rate {slope:.3}, errors {errs:?}"
+    );
     assert!(errs[3] < 1e-3, "finest error {}", errs[3]);
-    assert!(exact < -5.0e6, "a restrained block heated by hydration is compressed: {exact}");
+    assert!(
+        exact < -5.0e6,
+        "a restrained block heated by hydration is compressed: {exact}"
+    );
 }
 
 /// E(τ) = E0(1 − e^{−aτ^b}) with the usual b ≈ 0.34 grows like τ^b at birth:
@@ -177,5 +221,8 @@ fn restrained_block_under_hydration_converges_at_second_order_for_a_smooth_modul
 fn with_the_usual_modulus_exponent_the_rate_is_one_plus_b() {
     let b = 0.34;
     let (slope, errs, _) = restrained_rate(b);
-    assert!((slope - (1.0 + b)).abs() < 0.1, "rate {slope:.3}, errors {errs:?}");
+    assert!(
+        (slope - (1.0 + b)).abs() < 0.1,
+        "rate {slope:.3}, errors {errs:?}"
+    );
 }

@@ -118,7 +118,7 @@ fn unknown_key() {
     assert_eq!(
         err(&text),
         "models/x.toml:23:1: unknown key `conductivty` in [concrete], expected one of \
-         `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `adiabatic`"
+         `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `adiabatic`, `modulus`, `poisson`, `expansion_per_c`, `creep`, `autogenous`"
     );
 }
 
@@ -135,7 +135,7 @@ fn unknown_key_in_geometry_is_located() {
 #[test]
 fn misspelled_effect() {
     let text = replaced(BASE, "\"ambient\"]", "\"ambiant\"]");
-    assert_eq!(err(&text), "models/x.toml:3:41: effects: unknown variant `ambiant`, expected one of `hydration`, `pipe_cooling`, `ambient`, `reservoir_temperature`");
+    assert_eq!(err(&text), "models/x.toml:3:41: effects: unknown variant `ambiant`, expected one of `hydration`, `pipe_cooling`, `ambient`, `reservoir_temperature`, `thermal_strain`, `self_weight`, `creep`, `autogenous`, `reservoir_load`, `joints`");
 }
 
 #[test]
@@ -372,4 +372,51 @@ fn shipped_models_load() {
             "{name}: schedules folder"
         );
     }
+}
+
+#[test]
+fn mechanical_effect_without_modulus() {
+    let text = replaced(
+        BASE,
+        "effects = [\"hydration\", \"pipe_cooling\", \"ambient\"]",
+        "effects = [\"hydration\", \"self_weight\"]",
+    );
+    assert_eq!(
+        err(&text),
+        "models/x.toml: effect `self_weight` needs concrete.modulus, which is missing"
+    );
+}
+
+#[test]
+fn thermal_strain_without_expansion() {
+    let text = replaced(
+        BASE,
+        "effects = [\"hydration\", \"pipe_cooling\", \"ambient\"]",
+        "effects = [\"hydration\", \"thermal_strain\"]",
+    )
+    .replace(
+        "conductivity_w_mk = 2.2",
+        "conductivity_w_mk = 2.2\nmodulus = { e0_pa = 3.0e10, a = 0.4, b = 0.34 }\npoisson = 0.2",
+    );
+    assert_eq!(
+        err(&text),
+        "models/x.toml: effect `thermal_strain` needs concrete.expansion_per_c, which is missing"
+    );
+}
+
+#[test]
+fn poisson_ratio_out_of_range() {
+    let text = replaced(
+        BASE,
+        "effects = [\"hydration\", \"pipe_cooling\", \"ambient\"]",
+        "effects = [\"hydration\", \"self_weight\"]",
+    )
+    .replace(
+        "conductivity_w_mk = 2.2",
+        "conductivity_w_mk = 2.2\nmodulus = { e0_pa = 3.0e10, a = 0.4, b = 0.34 }\npoisson = 0.5",
+    );
+    assert_eq!(
+        err(&text),
+        "models/x.toml: concrete.poisson must be in [0, 0.5), got 0.5"
+    );
 }

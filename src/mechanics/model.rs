@@ -7,7 +7,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8::FACES;
-use crate::fem::{nested_dissection, CholeskySolver, ElementError, Ordering, Pattern, SolveError, SparseSym};
+use crate::fem::{
+    nested_dissection, CholeskySolver, ElementError, Ordering, Pattern, SolveError, SparseSym,
+};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind};
@@ -27,9 +29,16 @@ pub enum MechError {
     #[error("mechanical solve on day {day:.3}: relative residual {residual:.3e} exceeds {RESIDUAL_TOLERANCE:.0e}")]
     Residual { day: f64, residual: f64 },
     #[error("element {element}: {source}")]
-    Element { element: usize, source: ElementError },
+    Element {
+        element: usize,
+        source: ElementError,
+    },
     #[error("element {element} on day {day:.3}: {source}")]
-    Age { element: usize, day: f64, source: AgeStepError },
+    Age {
+        element: usize,
+        day: f64,
+        source: AgeStepError,
+    },
     #[error("the scene has mechanical effects but no {0}")]
     Missing(&'static str),
 }
@@ -132,7 +141,11 @@ pub struct MechanicsModel {
 
 impl MechanicsModel {
     /// Builds the model; rock elements are born (stress-free) at day 0.
-    pub fn new(mesh: &Mesh, scene: &Scene, supports: &Supports) -> Result<MechanicsModel, MechError> {
+    pub fn new(
+        mesh: &Mesh,
+        scene: &Scene,
+        supports: &Supports,
+    ) -> Result<MechanicsModel, MechError> {
         let c = &scene.concrete;
         let modulus = c.modulus.ok_or(MechError::Missing("concrete.modulus"))?;
         let nu_c = c.poisson.ok_or(MechError::Missing("concrete.poisson"))?;
@@ -142,19 +155,37 @@ impl MechanicsModel {
         let mut rock_modulus = 0.0;
         for (e, part) in mesh.parts.iter().enumerate() {
             let coords = mesh.element_coords(e);
-            let g = elasticity::gauss_points(&coords).map_err(|source| MechError::Element { element: e, source })?;
+            let g = elasticity::gauss_points(&coords)
+                .map_err(|source| MechError::Element { element: e, source })?;
             let (n, a, rho, is_c) = match part {
-                Part::Concrete { .. } => (nu_c, c.expansion_per_c.unwrap_or(0.0), c.density_kg_m3, true),
+                Part::Concrete { .. } => (
+                    nu_c,
+                    c.expansion_per_c.unwrap_or(0.0),
+                    c.density_kg_m3,
+                    true,
+                ),
                 Part::Rock => {
-                    let r = scene.rock.as_ref().ok_or(MechError::Missing("[rock] table"))?;
+                    let r = scene
+                        .rock
+                        .as_ref()
+                        .ok_or(MechError::Missing("[rock] table"))?;
                     rock_modulus = r.modulus_pa.ok_or(MechError::Missing("rock.modulus_pa"))?;
-                    (r.poisson.unwrap_or(0.25), r.expansion_per_c.unwrap_or(0.0), r.density_kg_m3, false)
+                    (
+                        r.poisson.unwrap_or(0.25),
+                        r.expansion_per_c.unwrap_or(0.0),
+                        r.density_kg_m3,
+                        false,
+                    )
                 }
             };
             k_unit.push(elasticity::stiffness(&g, &elasticity::isotropic_d(1.0, n)));
             gauss.push(g);
             nu.push(n);
-            alpha.push(if scene.has(Effect::ThermalStrain) { a } else { 0.0 });
+            alpha.push(if scene.has(Effect::ThermalStrain) {
+                a
+            } else {
+                0.0
+            });
             density.push(rho);
             concrete.push(is_c);
         }
@@ -165,10 +196,17 @@ impl MechanicsModel {
         let mut lift_elems: std::collections::HashMap<(u32, u32), Vec<u32>> = Default::default();
         for (e, part) in mesh.parts.iter().enumerate() {
             if let Part::Concrete { block, lift } = part {
-                lift_elems.entry((*block, *lift)).or_default().push(e as u32);
+                lift_elems
+                    .entry((*block, *lift))
+                    .or_default()
+                    .push(e as u32);
             }
         }
-        let creep_law = if scene.has(Effect::Creep) { c.creep.clone() } else { None };
+        let creep_law = if scene.has(Effect::Creep) {
+            c.creep.clone()
+        } else {
+            None
+        };
         let n_creep = creep_law.as_ref().map_or(0, |l| l.n_terms());
         let mut model = MechanicsModel {
             gauss,
@@ -181,7 +219,11 @@ impl MechanicsModel {
             rock_modulus,
             creep_law,
             no_creep: CreepLaw { terms: Vec::new() },
-            autogenous: if scene.has(Effect::Autogenous) { c.autogenous } else { None },
+            autogenous: if scene.has(Effect::Autogenous) {
+                c.autogenous
+            } else {
+                None
+            },
             thermal_strain: scene.has(Effect::ThermalStrain),
             self_weight: scene.has(Effect::SelfWeight),
             reservoir_load: scene.has(Effect::ReservoirLoad),
@@ -203,7 +245,11 @@ impl MechanicsModel {
                 live: vec![false; n_el],
                 birth_day: vec![f64::NAN; n_el],
                 stress: vec![[[0.0; 6]; 8]; n_el],
-                creep: if n_creep > 0 { vec![CreepState::new(n_creep); 8 * n_el] } else { Vec::new() },
+                creep: if n_creep > 0 {
+                    vec![CreepState::new(n_creep); 8 * n_el]
+                } else {
+                    Vec::new()
+                },
                 f_ext: vec![0.0; 3 * mesh.nodes.len()],
                 water_load: vec![0.0; 3 * mesh.nodes.len()],
                 weight_applied: vec![false; n_el],
@@ -258,15 +304,29 @@ impl MechanicsModel {
         }
         let n = dofs.len();
         let pattern = Arc::new(Pattern::new(n, &local));
-        let xyz: Vec<[f64; 3]> = dofs.iter().map(|&d| self.node_xyz[d as usize / 3]).collect();
+        let xyz: Vec<[f64; 3]> = dofs
+            .iter()
+            .map(|&d| self.node_xyz[d as usize / 3])
+            .collect();
         let ordering = Ordering::Custom(nested_dissection(&pattern, &xyz, 64));
-        let par = if n < 30_000 { faer::Par::Seq } else { faer::Par::rayon(0) };
+        let par = if n < 30_000 {
+            faer::Par::Seq
+        } else {
+            faer::Par::rayon(0)
+        };
         let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
         let fixed = dofs.iter().map(|&d| self.supported[d as usize]).collect();
         self.stats.symbolic += 1;
         self.stats.max_dofs = self.stats.max_dofs.max(n);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
-        self.sys = Some(LiveMech { dofs, index_of, elems, pattern, solver, fixed });
+        self.sys = Some(LiveMech {
+            dofs,
+            index_of,
+            elems,
+            pattern,
+            solver,
+            fixed,
+        });
         self.dirty = false;
         Ok(())
     }
@@ -275,11 +335,20 @@ impl MechanicsModel {
         let birth = self.state.birth_day[e];
         let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
         let res = if self.concrete[e] {
-            creep::coefficients(&self.modulus, self.creep_law.as_ref().unwrap_or(&self.no_creep), age0, age1)
+            creep::coefficients(
+                &self.modulus,
+                self.creep_law.as_ref().unwrap_or(&self.no_creep),
+                age0,
+                age1,
+            )
         } else {
             creep::coefficients(&self.rock_modulus, &self.no_creep, age0, age1)
         };
-        res.map_err(|source| MechError::Age { element: e, day: t1, source })
+        res.map_err(|source| MechError::Age {
+            element: e,
+            day: t1,
+            source,
+        })
     }
 
     /// Temperature at each Gauss point of element `e` from thermal-dof temperatures.
@@ -287,7 +356,9 @@ impl MechanicsModel {
         let conn = &self.elements[e];
         std::array::from_fn(|g| {
             let n = crate::fem::hex8::shape(self.gauss[e][g].xi);
-            (0..8).map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize]).sum()
+            (0..8)
+                .map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize])
+                .sum()
         })
     }
 
@@ -302,12 +373,18 @@ impl MechanicsModel {
                 continue;
             }
             let ids = FACES[face as usize];
-            let fc: [[f64; 3]; 4] = std::array::from_fn(|k| self.node_xyz[self.elements[e as usize][ids[k]] as usize]);
+            let fc: [[f64; 3]; 4] =
+                std::array::from_fn(|k| self.node_xyz[self.elements[e as usize][ids[k]] as usize]);
             if fc.iter().all(|p| p[2] >= level) {
                 continue;
             }
-            let load = elasticity::face_pressure(&fc, |x| WATER_DENSITY * GRAVITY * (level - x[2]).max(0.0))
-                .map_err(|source| MechError::Element { element: e as usize, source })?;
+            let load = elasticity::face_pressure(&fc, |x| {
+                WATER_DENSITY * GRAVITY * (level - x[2]).max(0.0)
+            })
+            .map_err(|source| MechError::Element {
+                element: e as usize,
+                source,
+            })?;
             for k in 0..4 {
                 let node = self.elements[e as usize][ids[k]] as usize;
                 for c in 0..3 {
@@ -329,7 +406,8 @@ impl MechanicsModel {
         water_level: Option<f64>,
     ) -> Result<(), MechError> {
         if self.dirty {
-            self.rebuild().map_err(|source| MechError::Solve { day: t1, source })?;
+            self.rebuild()
+                .map_err(|source| MechError::Solve { day: t1, source })?;
         }
         let t_asm = Instant::now();
         let sys = self.sys.as_ref().expect("built");
@@ -350,8 +428,13 @@ impl MechanicsModel {
                 }
             }
             let mut volumetric = [0.0; 8];
-            if let (true, Some((before, after))) = (self.thermal_strain && self.alpha[e] != 0.0, temps) {
-                let (t_a, t_b) = (self.gauss_temperatures(e, before), self.gauss_temperatures(e, after));
+            if let (true, Some((before, after))) =
+                (self.thermal_strain && self.alpha[e] != 0.0, temps)
+            {
+                let (t_a, t_b) = (
+                    self.gauss_temperatures(e, before),
+                    self.gauss_temperatures(e, after),
+                );
                 for g in 0..8 {
                     volumetric[g] += self.alpha[e] * (t_b[g] - t_a[g]);
                 }
@@ -380,7 +463,10 @@ impl MechanicsModel {
             for &e in &sys.elems {
                 let e = e as usize;
                 if !self.state.weight_applied[e] {
-                    let w = elasticity::body_force_at(&self.gauss[e], [0.0, 0.0, -self.density[e] * GRAVITY]);
+                    let w = elasticity::body_force_at(
+                        &self.gauss[e],
+                        [0.0, 0.0, -self.density[e] * GRAVITY],
+                    );
                     let gd = elasticity::element_dofs(&self.elements[e]);
                     for k in 0..24 {
                         df_ext[gd[k] as usize] += w[k];
@@ -405,12 +491,16 @@ impl MechanicsModel {
 
         let sys = self.sys.as_mut().expect("built");
         let t_num = Instant::now();
-        sys.solver.factorize(&a).map_err(|source| MechError::Solve { day: t1, source })?;
+        sys.solver
+            .factorize(&a)
+            .map_err(|source| MechError::Solve { day: t1, source })?;
         self.stats.numeric += 1;
         self.stats.seconds_numeric += t_num.elapsed().as_secs_f64();
         let t_solve = Instant::now();
         let mut x = b.clone();
-        sys.solver.solve_in_place(&mut x).map_err(|source| MechError::Solve { day: t1, source })?;
+        sys.solver
+            .solve_in_place(&mut x)
+            .map_err(|source| MechError::Solve { day: t1, source })?;
         self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
         let residual = crate::fem::relative_residual(&a, &x, &b);
         if !(residual <= RESIDUAL_TOLERANCE) {

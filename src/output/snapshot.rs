@@ -35,15 +35,30 @@ pub fn write(path: &Path, sim: &Simulation<'_>) -> io::Result<()> {
         })
         .collect();
     let mut point_fields: Vec<(String, Vec<f64>)> = vec![("temperature_c".into(), temperature)];
-    let mut cell_fields: Vec<(String, Vec<f64>)> = vec![("block".into(), block), ("lift".into(), lift)];
+    let mut cell_fields: Vec<(String, Vec<f64>)> =
+        vec![("block".into(), block), ("lift".into(), lift)];
     if let Some(m) = &sim.mechanics {
         for (c, name) in ["ux_m", "uy_m", "uz_m"].iter().enumerate() {
-            point_fields.push((name.to_string(), (0..mesh.nodes.len()).map(|i| m.state.u[3 * i + c]).collect()));
+            point_fields.push((
+                name.to_string(),
+                (0..mesh.nodes.len())
+                    .map(|i| m.state.u[3 * i + c])
+                    .collect(),
+            ));
         }
         // Element means of the Gauss-point stresses, in MPa as engineers read them.
-        let mean = |e: usize, k: usize| m.state.stress[e].iter().map(|g| g[k]).sum::<f64>() / 8.0 * 1e-6;
-        for (k, name) in ["sxx_mpa", "syy_mpa", "szz_mpa", "sxy_mpa", "syz_mpa", "szx_mpa"].iter().enumerate() {
-            cell_fields.push((name.to_string(), (0..mesh.elements.len()).map(|e| mean(e, k)).collect()));
+        let mean =
+            |e: usize, k: usize| m.state.stress[e].iter().map(|g| g[k]).sum::<f64>() / 8.0 * 1e-6;
+        for (k, name) in [
+            "sxx_mpa", "syy_mpa", "szz_mpa", "sxy_mpa", "syz_mpa", "szx_mpa",
+        ]
+        .iter()
+        .enumerate()
+        {
+            cell_fields.push((
+                name.to_string(),
+                (0..mesh.elements.len()).map(|e| mean(e, k)).collect(),
+            ));
         }
         let vm = (0..mesh.elements.len())
             .map(|e| {
@@ -53,7 +68,13 @@ pub fn write(path: &Path, sim: &Simulation<'_>) -> io::Result<()> {
             .collect();
         cell_fields.push(("von_mises_mpa".into(), vm));
     }
-    let pf: Vec<(&str, &[f64])> = point_fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-    let cf: Vec<(&str, &[f64])> = cell_fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    let pf: Vec<(&str, &[f64])> = point_fields
+        .iter()
+        .map(|(n, v)| (n.as_str(), v.as_slice()))
+        .collect();
+    let cf: Vec<(&str, &[f64])> = cell_fields
+        .iter()
+        .map(|(n, v)| (n.as_str(), v.as_slice()))
+        .collect();
     vtu::write_vtu(path, mesh, &pf, &cf, Some(&live))
 }

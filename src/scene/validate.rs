@@ -453,7 +453,9 @@ fn mechanical(s: &Scene) -> Check {
         return Err(need("autogenous", "autogenous"));
     }
     if let Some(m) = &c.modulus {
-        m.validate().map_err(|e| SceneError::invalid("concrete.modulus", format!("concrete.modulus.{e}")))?;
+        m.validate().map_err(|e| {
+            SceneError::invalid("concrete.modulus", format!("concrete.modulus.{e}"))
+        })?;
     }
     if let Some(nu) = c.poisson {
         poisson_ratio("concrete.poisson", nu)?;
@@ -468,10 +470,13 @@ fn mechanical(s: &Scene) -> Check {
         }
     }
     if let Some(cr) = &c.creep {
-        cr.validate().map_err(|e| SceneError::invalid("concrete.creep", format!("concrete.creep: {e}")))?;
+        cr.validate()
+            .map_err(|e| SceneError::invalid("concrete.creep", format!("concrete.creep: {e}")))?;
     }
     if let Some(g) = &c.autogenous {
-        g.validate().map_err(|e| SceneError::invalid("concrete.autogenous", format!("concrete.autogenous.{e}")))?;
+        g.validate().map_err(|e| {
+            SceneError::invalid("concrete.autogenous", format!("concrete.autogenous.{e}"))
+        })?;
     }
     if let Some(r) = &s.rock {
         if s.any_mechanical() && r.modulus_pa.is_none() {
@@ -495,7 +500,10 @@ fn mechanical(s: &Scene) -> Check {
 
 fn poisson_ratio(key: &str, nu: f64) -> Check {
     if !(nu.is_finite() && (0.0..0.5).contains(&nu)) {
-        return Err(SceneError::invalid(key, format!("{key} must be in [0, 0.5), got {nu}")));
+        return Err(SceneError::invalid(
+            key,
+            format!("{key} must be in [0, 0.5), got {nu}"),
+        ));
     }
     Ok(())
 }

@@ -428,7 +428,10 @@ mod tests {
         let s = synthesize(&l, &p);
         validate(&s).unwrap();
         check_against(&s, &l).unwrap();
-        assert_eq!(s.pours.len(), l.blocks.iter().map(|b| b.1 as usize).sum::<usize>());
+        assert_eq!(
+            s.pours.len(),
+            l.blocks.iter().map(|b| b.1 as usize).sum::<usize>()
+        );
         assert_eq!(s.grouting.len(), l.zones.len());
 
         // Central blocks first, banks later.

@@ -8,12 +8,12 @@ use std::path::Path;
 
 use chrono::NaiveDate;
 
+use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::{Mesh, PointKind};
 use crate::scene::{Effect, Scene};
 use crate::schedule::Schedules;
 use crate::thermal::boundary::{day_of, AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
-use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
 
 use timeline::{snap, DayEvents, Ladder, Timeline};
@@ -143,11 +143,18 @@ impl<'a> Simulation<'a> {
             None
         };
         let mechanics = if scene.any_mechanical() {
-            Some(MechanicsModel::new(mesh, scene, &Supports::far_boundary(mesh))?)
+            Some(MechanicsModel::new(
+                mesh,
+                scene,
+                &Supports::far_boundary(mesh),
+            )?)
         } else {
             None
         };
-        let levels = schedules.reservoir.as_ref().map(|r| Series::from_dated(epoch, r));
+        let levels = schedules
+            .reservoir
+            .as_ref()
+            .map(|r| Series::from_dated(epoch, r));
         let mut records = ZoneRecords::default();
         records.points = mesh
             .zone_points
@@ -234,7 +241,9 @@ impl<'a> Simulation<'a> {
             if let Some(m) = self.mechanics.as_mut() {
                 let level = self.levels.as_ref().and_then(|l| {
                     let first = l.first_day()?;
-                    (t1 >= first).then(|| l.at(t1.min(l.last_day().unwrap_or(t1)))).flatten()
+                    (t1 >= first)
+                        .then(|| l.at(t1.min(l.last_day().unwrap_or(t1))))
+                        .flatten()
                 });
                 let temps = match (&before, &self.thermal) {
                     (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
