@@ -70,28 +70,9 @@ pub use arch::generate_arch;
 pub use blocks::generate_blocks;
 pub use vtu::{write_pvd, write_vtu};
 
-/// Local faces of a hex8 (same table as `fem::hex8::FACES`): nodes counter-clockwise
-/// seen from outside.
-pub const HEX_FACES: [[usize; 4]; 6] = [
-    [0, 3, 2, 1], // 0: ζ = −1 (bottom)
-    [4, 5, 6, 7], // 1: ζ = +1 (top)
-    [0, 1, 5, 4], // 2: η = −1 (upstream side)
-    [1, 2, 6, 5], // 3: ξ = +1 (right-bank side)
-    [2, 3, 7, 6], // 4: η = +1 (downstream side)
-    [3, 0, 4, 7], // 5: ξ = −1 (left-bank side)
-];
-
-/// Reference coordinates of the hex8 nodes (VTK order).
-const HEX_REF: [[f64; 3]; 8] = [
-    [-1.0, -1.0, -1.0],
-    [1.0, -1.0, -1.0],
-    [1.0, 1.0, -1.0],
-    [-1.0, 1.0, -1.0],
-    [-1.0, -1.0, 1.0],
-    [1.0, -1.0, 1.0],
-    [1.0, 1.0, 1.0],
-    [-1.0, 1.0, 1.0],
-];
+/// Local faces of a hex8: the one table of `fem::hex8`.
+pub use crate::fem::hex8::FACES as HEX_FACES;
+use crate::fem::hex8::NODES as HEX_REF;
 
 /// Errors of the generators and of [`Mesh::validate`].
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -300,36 +281,12 @@ pub fn quad_shape(s: f64, t: f64) -> [f64; 4] {
 
 /// Determinant of the hex8 Jacobian at reference point (ξ, η, ζ).
 pub fn hex_jacobian_det(x: &[[f64; 3]; 8], xi: f64, eta: f64, zeta: f64) -> f64 {
-    let mut j = [[0.0f64; 3]; 3]; // j[r][c] = ∂x_r/∂ξ_c
-    for (a, r) in HEX_REF.iter().enumerate() {
-        let d = [
-            0.125 * r[0] * (1.0 + r[1] * eta) * (1.0 + r[2] * zeta),
-            0.125 * r[1] * (1.0 + r[0] * xi) * (1.0 + r[2] * zeta),
-            0.125 * r[2] * (1.0 + r[0] * xi) * (1.0 + r[1] * eta),
-        ];
-        for row in 0..3 {
-            for col in 0..3 {
-                j[row][col] += x[a][row] * d[col];
-            }
-        }
-    }
-    j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
-        - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
-        + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+    crate::fem::hex8::jacobian(x, [xi, eta, zeta]).1
 }
 
-/// Exact volume of a hex8 with planar-or-not faces (8-point Gauss, exact for trilinear maps).
+/// Exact volume of a hex8 (Gauss, exact for trilinear maps).
 pub fn hex_volume(x: &[[f64; 3]; 8]) -> f64 {
-    let g = 1.0 / 3f64.sqrt();
-    let mut v = 0.0;
-    for a in [-g, g] {
-        for b in [-g, g] {
-            for c in [-g, g] {
-                v += hex_jacobian_det(x, a, b, c);
-            }
-        }
-    }
-    v
+    crate::fem::hex8::volume(x)
 }
 
 impl Mesh {

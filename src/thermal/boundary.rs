@@ -57,11 +57,6 @@ fn day_of_year(epoch: NaiveDate, day: f64) -> f64 {
     date.ordinal() as f64 + (day - whole)
 }
 
-/// Annual cosine: mean + amplitude·cos(2π(d − warmest)/365).
-fn annual(mean: f64, amplitude: f64, warmest_day: f64, doy: f64) -> f64 {
-    mean + amplitude * (2.0 * std::f64::consts::PI * (doy - warmest_day) / 365.0).cos()
-}
-
 /// Air temperature: weather.csv inside its date range, the scene's annual law outside.
 #[derive(Debug, Clone)]
 pub struct AirTemperature {
@@ -87,12 +82,7 @@ impl AirTemperature {
         if let Some(t) = self.weather.as_ref().and_then(|w| w.at(day)) {
             return t;
         }
-        annual(
-            self.law.mean_c,
-            self.law.amplitude_c,
-            self.law.warmest_day_of_year,
-            day_of_year(self.epoch, day),
-        )
+        self.law.temperature_c(day_of_year(self.epoch, day))
     }
 }
 
@@ -122,14 +112,7 @@ impl Water {
 
     /// T(y, t) = bottom + (surface(t) − bottom)·e^{−decay·y}, y = depth below the surface.
     pub fn temperature(&self, day: f64, depth: f64) -> f64 {
-        let r = &self.law;
-        let surface = annual(
-            r.surface_mean_c,
-            r.surface_amplitude_c,
-            r.warmest_day_of_year,
-            day_of_year(self.epoch, day),
-        );
-        r.bottom_temp_c + (surface - r.bottom_temp_c) * (-r.decay_per_m * depth.max(0.0)).exp()
+        self.law.temperature_c(depth, day_of_year(self.epoch, day))
     }
 }
 
