@@ -23,6 +23,7 @@
 //! accumulated stresses with the accumulated loads) on top of the element
 //! tests of `fem::elasticity` and the material tests of `material::creep`.
 
+pub mod joints;
 pub mod model;
 
 pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};

@@ -10,10 +10,13 @@ use crate::fem::hex8::FACES;
 use crate::fem::{
     nested_dissection, CholeskySolver, ElementError, Ordering, Pattern, SolveError, SparseSym,
 };
+use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind};
 use crate::scene::{Effect, Scene};
+
+use super::joints::{build_points, JointPoint, JointPointState, PointState};
 
 /// Gravity [m/s²].
 pub const GRAVITY: f64 = 9.81;
@@ -41,6 +44,11 @@ pub enum MechError {
     },
     #[error("the scene has mechanical effects but no {0}")]
     Missing(&'static str),
+    #[error("joint contact on day {day:.3}: {source}")]
+    Contact {
+        day: f64,
+        source: crate::joint::ContactError,
+    },
 }
 
 /// Prescribed zero displacement increments: (node, component 0..3).
@@ -98,6 +106,10 @@ pub struct MechState {
     /// water load applied so far, per dof [N]
     pub water_load: Vec<f64>,
     pub weight_applied: Vec<bool>,
+    /// one per joint contact point (empty without the `joints` effect)
+    pub joints: Vec<JointPointState>,
+    /// nodal forces of the joint contacts, per dof [N] (total, not incremental)
+    pub f_contact: Vec<f64>,
 }
 
 struct LiveMech {
@@ -135,6 +147,10 @@ pub struct MechanicsModel {
     wet_faces: Vec<(u32, u8)>,
     sys: Option<LiveMech>,
     dirty: bool,
+    /// contact points of the joints (the `joints` effect)
+    pub points: Vec<JointPoint>,
+    friction: FrictionModel,
+    initial_gap: f64,
     pub state: MechState,
     pub stats: MechStats,
 }
@@ -207,6 +223,20 @@ impl MechanicsModel {
         } else {
             None
         };
+        let points = if scene.has(Effect::Joints) {
+            build_points(mesh).map_err(|source| MechError::Contact { day: 0.0, source })?
+        } else {
+            Vec::new()
+        };
+        let j = &scene.joints;
+        let friction = if j.mu_static == 0.0 {
+            FrictionModel::Frictionless
+        } else {
+            FrictionModel::Coulomb {
+                mu_s: j.mu_static,
+                mu_k: j.mu_kinetic,
+            }
+        };
         let n_creep = creep_law.as_ref().map_or(0, |l| l.n_terms());
         let mut model = MechanicsModel {
             gauss,
@@ -240,7 +270,19 @@ impl MechanicsModel {
                 .collect(),
             sys: None,
             dirty: true,
+            friction,
+            initial_gap: j.initial_gap_m,
             state: MechState {
+                joints: vec![
+                    JointPointState {
+                        paired: false,
+                        gap: 0.0,
+                        force: [0.0; 3],
+                        state: PointState::Open
+                    };
+                    points.len()
+                ],
+                f_contact: vec![0.0; 3 * mesh.nodes.len()],
                 u: vec![0.0; 3 * mesh.nodes.len()],
                 live: vec![false; n_el],
                 birth_day: vec![f64::NAN; n_el],
@@ -255,6 +297,7 @@ impl MechanicsModel {
                 weight_applied: vec![false; n_el],
             },
             stats: MechStats::default(),
+            points,
         };
         for e in 0..n_el {
             if !model.concrete[e] {
@@ -506,6 +549,9 @@ impl MechanicsModel {
         if !(residual <= RESIDUAL_TOLERANCE) {
             return Err(MechError::Residual { day: t1, residual });
         }
+        if !self.points.is_empty() {
+            x = self.solve_joints(&x, t1)?;
+        }
 
         // Commit: displacements, stresses, creep states, loads.
         let sys = self.sys.as_ref().expect("built");
@@ -546,6 +592,100 @@ impl MechanicsModel {
         Ok(())
     }
 
+    /// Joint contact of the step: given the free increment `x0` (no change of
+    /// contact forces), finds the total contact forces of the live points
+    /// from the condensed problem u = b + W r (W = C A⁻¹ Cᵀ by multi-column
+    /// solves on the step's factor, `joint::solve`), and returns
+    /// Δu = x0 + A⁻¹Cᵀ(r − r_old).
+    fn solve_joints(&mut self, x0: &[f64], day: f64) -> Result<Vec<f64>, MechError> {
+        let sys = self.sys.as_ref().expect("built");
+        let n = sys.dofs.len();
+        let live: Vec<usize> = (0..self.points.len())
+            .filter(|&p| {
+                let (a, b) = (self.points[p].a as usize, self.points[p].b as usize);
+                sys.index_of[3 * a] != NONE && sys.index_of[3 * b] != NONE
+            })
+            .collect();
+        if live.is_empty() {
+            return Ok(x0.to_vec());
+        }
+        for &p in &live {
+            let st = &mut self.state.joints[p];
+            if !st.paired {
+                *st = JointPointState {
+                    paired: true,
+                    gap: self.initial_gap,
+                    force: [0.0; 3],
+                    state: PointState::Open,
+                };
+            }
+        }
+        // Cᵀ: column 3q+k = relative displacement of B − A along local axis k.
+        let m = 3 * live.len();
+        let mut ct = faer::Mat::<f64>::zeros(n, m);
+        for (q, &p) in live.iter().enumerate() {
+            let pt = &self.points[p];
+            let axes = [pt.frame.t1, pt.frame.t2, pt.frame.n];
+            for (k, e) in axes.iter().enumerate() {
+                for c in 0..3 {
+                    let ib = sys.index_of[3 * pt.b as usize + c] as usize;
+                    let ia = sys.index_of[3 * pt.a as usize + c] as usize;
+                    if !sys.fixed[ib] {
+                        ct[(ib, 3 * q + k)] += e[c];
+                    }
+                    if !sys.fixed[ia] {
+                        ct[(ia, 3 * q + k)] -= e[c];
+                    }
+                }
+            }
+        }
+        let mut minv_ct = ct.clone();
+        sys.solver
+            .solve_columns(&mut minv_ct)
+            .map_err(|source| MechError::Solve { day, source })?;
+        let w_faer = ct.transpose() * &minv_ct;
+        let w = nalgebra::DMatrix::from_fn(m, m, |i, j| 0.5 * (w_faer[(i, j)] + w_faer[(j, i)]));
+        let r_old: Vec<f64> = live
+            .iter()
+            .flat_map(|&p| self.state.joints[p].force)
+            .collect();
+        // Free increment with the old contact forces removed.
+        let mut du0 = x0.to_vec();
+        for i in 0..n {
+            du0[i] -= (0..m).map(|k| minv_ct[(i, k)] * r_old[k]).sum::<f64>();
+        }
+        let mut bvec = vec![0.0; m];
+        for k in 0..m {
+            bvec[k] = (0..n).map(|i| ct[(i, k)] * du0[i]).sum::<f64>();
+        }
+        for (q, &p) in live.iter().enumerate() {
+            bvec[3 * q + 2] += self.state.joints[p].gap;
+        }
+        let friction = vec![self.friction; live.len()];
+        let problem = ContactProblem::new(&w, &bvec, &friction);
+        let sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))
+            .map_err(|source| MechError::Contact { day, source })?;
+        let mut x = du0;
+        for i in 0..n {
+            x[i] += (0..m).map(|k| minv_ct[(i, k)] * sol.r[k]).sum::<f64>();
+        }
+        // Contact forces on the nodes (total), for the equilibrium check.
+        self.state.f_contact.iter_mut().for_each(|f| *f = 0.0);
+        for (q, &p) in live.iter().enumerate() {
+            let pt = &self.points[p];
+            let st = &mut self.state.joints[p];
+            st.force = [sol.r[3 * q], sol.r[3 * q + 1], sol.r[3 * q + 2]];
+            st.gap = sol.u[3 * q + 2];
+            st.state = sol.states[q].into();
+            let global = pt.frame.to_global(st.force);
+            for c in 0..3 {
+                self.state.f_contact[3 * pt.b as usize + c] += global[c];
+                self.state.f_contact[3 * pt.a as usize + c] -= global[c];
+            }
+        }
+        Ok(x)
+    }
+
     /// ‖Σ Bᵀσ − f_ext‖ / ‖f_ext‖ (or the internal-force scale when no load)
     /// over the free live dofs: the accumulated stresses must balance the
     /// accumulated loads.
@@ -567,9 +707,10 @@ impl MechanicsModel {
             if sys.fixed[i] {
                 continue;
             }
-            let r = fint[d as usize] - self.state.f_ext[d as usize];
+            let f = self.state.f_ext[d as usize] + self.state.f_contact[d as usize];
+            let r = fint[d as usize] - f;
             r2 += r * r;
-            f2 += self.state.f_ext[d as usize].powi(2);
+            f2 += f * f;
         }
         r2.sqrt() / f2.sqrt().max(scale).max(f64::MIN_POSITIVE)
     }

@@ -132,6 +132,22 @@ pub struct Lifts {
 pub struct JointSettings {
     /// Grouting-zone height \[m\]; must be a whole number of lifts.
     pub zone_height_m: f64,
+    /// Static Coulomb friction of an ungrouted joint, default 0.6.
+    #[serde(default = "default_mu_static")]
+    pub mu_static: f64,
+    /// Kinetic Coulomb friction (≤ static), default 0.5.
+    #[serde(default = "default_mu_kinetic")]
+    pub mu_kinetic: f64,
+    /// Gap of a joint when its second block is poured \[m\], default 0.
+    #[serde(default)]
+    pub initial_gap_m: f64,
+}
+
+fn default_mu_static() -> f64 {
+    0.6
+}
+fn default_mu_kinetic() -> f64 {
+    0.5
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -38,6 +38,28 @@ pub(super) fn validate(s: &Scene) -> Check {
     }
 
     mechanical(s)?;
+    let j = &s.joints;
+    if !(j.mu_static.is_finite() && j.mu_static >= 0.0) {
+        return Err(SceneError::invalid(
+            "joints.mu_static",
+            format!("joints.mu_static must be >= 0, got {}", j.mu_static),
+        ));
+    }
+    if !(j.mu_kinetic.is_finite() && j.mu_kinetic >= 0.0 && j.mu_kinetic <= j.mu_static) {
+        return Err(SceneError::invalid(
+            "joints.mu_kinetic",
+            format!(
+                "joints.mu_kinetic = {} must be in [0, joints.mu_static = {}]",
+                j.mu_kinetic, j.mu_static
+            ),
+        ));
+    }
+    if !(j.initial_gap_m.is_finite() && j.initial_gap_m >= 0.0) {
+        return Err(SceneError::invalid(
+            "joints.initial_gap_m",
+            format!("joints.initial_gap_m must be >= 0, got {}", j.initial_gap_m),
+        ));
+    }
 
     // Concrete.
     let c = &s.concrete;

@@ -1,0 +1,130 @@
+//! Two blocks between fixed end walls on a frictionless base (DESIGN.md §7),
+//! through the full path: hex8 mechanics, joint contact points, condensed
+//! contact solve.
+
+mod common;
+
+use common::*;
+use groutready::mechanics::joints::PointState;
+use groutready::mechanics::{MechanicsModel, Supports};
+use groutready::mesh::Mesh;
+
+const E: f64 = 3.0e10;
+const ALPHA: f64 = 1.0e-5;
+const L_BLOCK: f64 = 10.0;
+
+/// Modulus that is E at any positive age (a = 1e6), no creep.
+const MECH: &str =
+    "modulus = { e0_pa = 3.0e10, a = 1.0e6, b = 1.0 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
+
+/// Walls at both ends (u_x = 0), frictionless base (u_z = 0), one side face
+/// held in y (u_y = 0) so the blocks are free to expand sideways and upwards.
+fn supports(mesh: &Mesh) -> Supports {
+    let xs = mesh.nodes.iter().map(|p| p[0]);
+    let (xmin, xmax) = (
+        xs.clone().fold(f64::MAX, f64::min),
+        xs.fold(f64::MIN, f64::max),
+    );
+    let ymin = mesh.nodes.iter().map(|p| p[1]).fold(f64::MAX, f64::min);
+    let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
+    let mut fixed = vec![];
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        if (p[0] - xmin).abs() < 1e-9 || (p[0] - xmax).abs() < 1e-9 {
+            fixed.push((i as u32, 0));
+        }
+        if (p[1] - ymin).abs() < 1e-9 {
+            fixed.push((i as u32, 1));
+        }
+        if (p[2] - zmin).abs() < 1e-9 {
+            fixed.push((i as u32, 2));
+        }
+    }
+    Supports { fixed }
+}
+
+/// Both blocks poured on day 0 at 20 °C, then a uniform ΔT in one day.
+fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
+    let joints = format!("[joints]\nzone_height_m = 3.0\nmu_static = 0.0\nmu_kinetic = 0.0\ninitial_gap_m = {gap0}\n");
+    let text_geometry = blocks_geometry(2, L_BLOCK, 5.0, 1, 2, 2);
+    let mut sc = scene_with_concrete("\"thermal_strain\", \"joints\"", &text_geometry, "", MECH);
+    let j: toml::Table = toml::from_str(&joints).unwrap();
+    sc.joints = j["joints"].clone().try_into().unwrap();
+    let mesh = blocks_mesh(&sc);
+    let mut m = MechanicsModel::new(&mesh, &sc, &supports(&mesh)).unwrap();
+    m.pour(1, 1, 0.0);
+    m.pour(2, 1, 0.0);
+    let t0 = vec![20.0; mesh.n_thermal_dofs];
+    let t1 = vec![20.0 + delta_t; mesh.n_thermal_dofs];
+    m.step(0.0, 1.0, Some((&t0, &t0)), None).unwrap();
+    m.step(1.0, 2.0, Some((&t0, &t1)), None).unwrap();
+    (m, mesh)
+}
+
+#[test]
+fn cooled_blocks_open_the_joint_by_their_free_contraction_without_stress() {
+    let (m, _) = run(-10.0, 0.0);
+    let expected = -ALPHA * -10.0 * (2.0 * L_BLOCK);
+    assert!(!m.points.is_empty());
+    for st in &m.state.joints {
+        assert_eq!(st.state, PointState::Open);
+        assert!(
+            (st.gap - expected).abs() < 1e-9 * expected,
+            "gap {} vs {expected}",
+            st.gap
+        );
+    }
+    let worst = m
+        .state
+        .stress
+        .iter()
+        .flatten()
+        .flatten()
+        .map(|s| s.abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-6 * E * ALPHA * 10.0,
+        "stress {worst} Pa in freely contracting blocks"
+    );
+    eprintln!(
+        "cooled: aperture {:.6} mm, largest stress {worst:.2e} Pa",
+        1e3 * m.state.joints[0].gap
+    );
+}
+
+#[test]
+fn heated_past_closure_the_blocks_press_with_the_closed_form_stress() {
+    let g0 = 0.5e-3;
+    let (m, _) = run(10.0, g0);
+    let l = 2.0 * L_BLOCK;
+    let expected = -E * (ALPHA * 10.0 * l - g0) / l;
+    let mut worst: f64 = 0.0;
+    for e in &m.state.stress {
+        for g in e {
+            worst = worst.max((g[0] - expected).abs() / expected.abs());
+            assert!(
+                g[1].abs() < 1e-6 * expected.abs() && g[2].abs() < 1e-6 * expected.abs(),
+                "{g:?}"
+            );
+        }
+    }
+    for st in &m.state.joints {
+        assert!(st.state != PointState::Open, "{st:?}");
+        assert!(st.gap.abs() < 1e-9 * g0, "gap {}", st.gap);
+    }
+    eprintln!(
+        "heated: σxx {expected:.6e} Pa, worst relative error {worst:.2e}, equilibrium {:.2e}",
+        m.equilibrium_residual()
+    );
+    assert!(worst < 1e-6, "σxx off by {worst:.2e}");
+    assert!(m.equilibrium_residual() < 1e-8);
+}
+
+#[test]
+fn heated_short_of_closure_the_joint_stays_open() {
+    let g0 = 3.0e-3; // αΔT·L = 2 mm < 3 mm
+    let (m, _) = run(10.0, g0);
+    for st in &m.state.joints {
+        assert_eq!(st.state, PointState::Open);
+        assert!((st.gap - (g0 - 2.0e-3)).abs() < 1e-9, "gap {}", st.gap);
+    }
+}
