@@ -4,6 +4,10 @@
 
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
+use common::Rng;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -19,19 +23,6 @@ use groutready::fem::{
 use nalgebra::{Matrix3, SMatrix};
 
 // ---------------------------------------------------------------- helpers
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
 
 struct Mesh {
     nodes: Vec<[f64; 3]>,

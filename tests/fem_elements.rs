@@ -3,33 +3,16 @@
 
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
+use common::Rng;
+
 use groutready::fem::{
     capacity_consistent, capacity_lumped, conductivity, element_volume_and_centroid,
     face_convection, face_convection_lumped, gauss_hex, gauss_legendre, gauss_quad, hex8, quad4,
     volume_load, ElementError,
 };
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-
-/// Small deterministic generator (xorshift64*), uniform in [lo, hi).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn point(&mut self) -> [f64; 3] {
-        [
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-        ]
-    }
-}
 
 fn box_hex(lx: f64, ly: f64, lz: f64, origin: [f64; 3]) -> [[f64; 3]; 8] {
     let mut c = [[0.0; 3]; 8];

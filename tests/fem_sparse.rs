@@ -3,6 +3,10 @@
 
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
+use common::Rng;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -13,19 +17,6 @@ use groutready::fem::{
     SparseSym, NO_DOF,
 };
 use nalgebra::{DMatrix, DVector, SMatrix};
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
 
 /// Structured hex grid of nx×ny×nz elements (spacing h), interior nodes
 /// jittered by `jitter`·h, node → dof through a shuffled numbering.

@@ -4,30 +4,19 @@
 //! ageing law against the superposition integral, newborn elements,
 //! telescoping autogenous strain, 3-D consistency, restart equality and the
 //! exact validation messages.
+
 // Index loops read best where several arrays share the index.
 #![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use common::{assert_rel, rel};
 
 use groutready::material::ageing::{mid_step_age, AgeStepError};
 use groutready::material::{
     coefficients, commit, commit_scalar, eta, eta_scalar, AutogenousLaw, CreepLaw, CreepState,
     CreepTerm, ModulusLaw, Poisson, ScalarCreepState,
 };
-
-fn rel(a: f64, b: f64) -> f64 {
-    if a == b {
-        0.0
-    } else {
-        (a - b).abs() / b.abs()
-    }
-}
-
-fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
-    let r = rel(got, want);
-    assert!(
-        r <= tol,
-        "{what}: got {got:e}, want {want:e}, relative error {r:e} > {tol:e}"
-    );
-}
 
 /// Least-squares slope of ln(err) against ln(dt).
 fn loglog_slope(dts: &[f64], errs: &[f64]) -> f64 {

@@ -1,29 +1,18 @@
 //! Checks of `groutready::material`: adiabatic rise laws, Zhu's pipe-cooling
 //! φ and the pipe correction, and the convolution H(t) against closed forms,
 //! an independent brute-force quadrature and 25-digit mpmath references.
+
 // References are quoted at the precision they were computed with.
 #![allow(clippy::excessive_precision)]
+
+mod common;
+
+use common::{assert_rel, rel};
 
 use groutready::material::pipe_cooling::{
     dimensionless_xi, first_eigenvalue_alpha_b, zhu_k_s, ALPHA1_B_AT_100,
 };
 use groutready::material::{hydration_under_cooling, AdiabaticRise, PipeLayout, ZhuPipe};
-
-fn rel(a: f64, b: f64) -> f64 {
-    if a == b {
-        0.0
-    } else {
-        (a - b).abs() / b.abs()
-    }
-}
-
-fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
-    let r = rel(got, want);
-    assert!(
-        r <= tol,
-        "{what}: got {got:e}, want {want:e}, relative error {r:e} > {tol:e}"
-    );
-}
 
 const EXP: AdiabaticRise = AdiabaticRise::Exponential {
     theta0: 25.0,

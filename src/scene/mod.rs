@@ -497,34 +497,42 @@ impl Scene {
 impl Concrete {
     /// λ in J/(m·day·K).
     pub fn conductivity_j_per_m_day_k(&self) -> f64 {
-        self.conductivity_w_mk * SECONDS_PER_DAY
+        heat::conductivity_per_day(self.conductivity_w_mk)
     }
 
     /// Volumetric heat capacity ρc [J/(m³ K)].
     pub fn heat_capacity_j_m3k(&self) -> f64 {
-        self.density_kg_m3 * self.specific_heat_j_kgk
+        heat::capacity(self.density_kg_m3, self.specific_heat_j_kgk)
     }
 
     /// Diffusivity a = λ/(ρc) [m²/day].
     pub fn diffusivity_m2_per_day(&self) -> f64 {
-        self.conductivity_j_per_m_day_k() / self.heat_capacity_j_m3k()
+        heat::diffusivity(
+            self.conductivity_w_mk,
+            self.density_kg_m3,
+            self.specific_heat_j_kgk,
+        )
     }
 }
 
 impl Rock {
     /// λ in J/(m·day·K).
     pub fn conductivity_j_per_m_day_k(&self) -> f64 {
-        self.conductivity_w_mk * SECONDS_PER_DAY
+        heat::conductivity_per_day(self.conductivity_w_mk)
     }
 
     /// Volumetric heat capacity ρc [J/(m³ K)].
     pub fn heat_capacity_j_m3k(&self) -> f64 {
-        self.density_kg_m3 * self.specific_heat_j_kgk
+        heat::capacity(self.density_kg_m3, self.specific_heat_j_kgk)
     }
 
     /// Diffusivity a = λ/(ρc) [m²/day].
     pub fn diffusivity_m2_per_day(&self) -> f64 {
-        self.conductivity_j_per_m_day_k() / self.heat_capacity_j_m3k()
+        heat::diffusivity(
+            self.conductivity_w_mk,
+            self.density_kg_m3,
+            self.specific_heat_j_kgk,
+        )
     }
 
     /// Initial rock temperature at elevation `z` [°C], given the elevation of
@@ -654,5 +662,22 @@ mod dates {
 
     pub(super) fn dates<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<NaiveDate>, D::Error> {
         d.deserialize_seq(SeqVisitor)
+    }
+}
+
+/// Unit conversions shared by every material with λ [W/(m K)], ρ and c.
+mod heat {
+    use super::SECONDS_PER_DAY;
+
+    pub fn conductivity_per_day(lambda_w_mk: f64) -> f64 {
+        lambda_w_mk * SECONDS_PER_DAY
+    }
+
+    pub fn capacity(density: f64, specific_heat: f64) -> f64 {
+        density * specific_heat
+    }
+
+    pub fn diffusivity(lambda_w_mk: f64, density: f64, specific_heat: f64) -> f64 {
+        conductivity_per_day(lambda_w_mk) / capacity(density, specific_heat)
     }
 }

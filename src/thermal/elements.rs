@@ -21,7 +21,7 @@ pub enum ElementDataError {
 }
 
 /// Seconds per day: conductivities and film coefficients are given per second (W).
-pub const SECONDS_PER_DAY: f64 = 86_400.0;
+pub use crate::scene::SECONDS_PER_DAY;
 
 pub struct ElementData {
     pub coords: Vec<[[f64; 3]; 8]>,
@@ -47,20 +47,16 @@ impl ElementData {
         let c = &scene.concrete;
         for (e, conn) in mesh.elements.iter().enumerate() {
             let coords: [[f64; 3]; 8] = std::array::from_fn(|k| mesh.nodes[conn[k] as usize]);
-            let (rho_c, lambda) = match mesh.parts[e] {
-                Part::Concrete { .. } => {
-                    (c.density_kg_m3 * c.specific_heat_j_kgk, c.conductivity_w_mk)
-                }
+            let (rho_c, lambda_day) = match mesh.parts[e] {
+                Part::Concrete { .. } => (c.heat_capacity_j_m3k(), c.conductivity_j_per_m_day_k()),
                 Part::Rock => {
                     // scene validation guarantees [rock] when the mesh has rock
                     let r = scene.rock.as_ref().ok_or(ElementDataError::NoRock)?;
-                    (r.density_kg_m3 * r.specific_heat_j_kgk, r.conductivity_w_mk)
+                    (r.heat_capacity_j_m3k(), r.conductivity_j_per_m_day_k())
                 }
             };
-            data.ke.push(thermal_kernels::conductivity(
-                &coords,
-                lambda * SECONDS_PER_DAY,
-            )?);
+            data.ke
+                .push(thermal_kernels::conductivity(&coords, lambda_day)?);
             data.cap_lumped
                 .push(thermal_kernels::capacity_lumped(&coords, rho_c)?);
             data.dofs

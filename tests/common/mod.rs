@@ -122,3 +122,43 @@ pub fn fitted_slope(h: &[f64], err: &[f64]) -> f64 {
     let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
     sxy / sxx
 }
+
+/// Small deterministic generator (xorshift64*), uniform in [lo, hi).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+    /// A point in the reference cube [−1, 1)³.
+    pub fn point(&mut self) -> [f64; 3] {
+        [
+            self.range(-1.0, 1.0),
+            self.range(-1.0, 1.0),
+            self.range(-1.0, 1.0),
+        ]
+    }
+}
+
+/// Relative difference |a − b|/|b| (0 when equal).
+pub fn rel(a: f64, b: f64) -> f64 {
+    if a == b {
+        0.0
+    } else {
+        (a - b).abs() / b.abs()
+    }
+}
+
+pub fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
+    let r = rel(got, want);
+    assert!(
+        r <= tol,
+        "{what}: got {got:e}, want {want:e}, relative error {r:e} > {tol:e}"
+    );
+}
