@@ -25,16 +25,70 @@ pub struct JointPoint {
     pub area: f64,
 }
 
-/// Checkpointable state of one contact point.
+/// Checkpointable state of one joint point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct JointPointState {
     /// both nodes exist
     pub paired: bool,
-    /// normal gap (aperture) [m], ≥ 0 up to solver tolerance
+    /// Normal opening [m]. Before grouting: the contact gap (≥ 0 up to solver
+    /// tolerance). After grouting: the opening since grouting (negative when
+    /// the grout layer is compressed; ≥ 0 again once the layer has cracked).
     pub gap: f64,
-    /// total contact force on side B in the local frame (t1, t2, n) [N]
+    /// total force on side B in the local frame (t1, t2, n) [N]; n > 0 presses
     pub force: [f64; 3],
     pub state: PointState,
+    /// direction (t1, t2) of the friction force while the point slips
+    pub slip_dir: [f64; 2],
+    /// the grout layer, from the zone's grouting date
+    pub grout: Option<Grout>,
+}
+
+impl JointPointState {
+    pub const UNPAIRED: JointPointState = JointPointState {
+        paired: false,
+        gap: 0.0,
+        force: [0.0; 3],
+        state: PointState::Open,
+        slip_dir: [0.0; 2],
+        grout: None,
+    };
+
+    /// Joint opening a joint meter set at the pour would read [m]: the gap
+    /// before grouting, the aperture grouted plus the opening since after.
+    pub fn aperture(&self) -> f64 {
+        match &self.grout {
+            None => self.gap,
+            Some(g) => g.aperture + self.gap,
+        }
+    }
+
+    /// Label for tables: open, stick, slip, grouted or reopened.
+    pub fn label(&self) -> &'static str {
+        match (&self.grout, self.state) {
+            (Some(g), _) if g.cracked_day.is_some() => "reopened",
+            (_, PointState::Grouted) => "grouted",
+            (_, PointState::Open) => "open",
+            (_, PointState::Stick) => "stick",
+            (_, PointState::Slip) => "slip",
+        }
+    }
+}
+
+/// The thin grout layer of a grouted point (the paper's eqs. 19–29): its
+/// reference is the deformed geometry at grouting, it carries the contact
+/// force of that moment as initial force, and its stiffness is
+/// area·diag(G, G, E)/t.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grout {
+    pub day: f64,
+    /// aperture filled by the grout [m]
+    pub aperture: f64,
+    /// layer thickness: the aperture, at least the scene's floor [m]
+    pub thickness: f64,
+    /// spring of the point in the local frame (t1, t2, n) [N/m]
+    pub stiffness: [f64; 3],
+    /// day the layer cracked in tension (then the point is a contact again)
+    pub cracked_day: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -42,6 +96,14 @@ pub enum PointState {
     Open,
     Stick,
     Slip,
+    /// bonded grout layer (intact)
+    Grouted,
+}
+
+impl PointState {
+    pub fn is_closed(self) -> bool {
+        matches!(self, PointState::Stick | PointState::Slip)
+    }
 }
 
 impl From<ContactState> for PointState {

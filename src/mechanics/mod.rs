@@ -18,12 +18,21 @@
 //! step (ageing) and is refactorised numerically on the symbolic analysis of
 //! the live set.
 //!
+//! With the `joints` effect the unknowns of each live joint point are the
+//! relative displacement of its node pair ([`live`]), and the step is solved
+//! with the joint states of [`contact_step`]: contact (open / stick / slip)
+//! before the zone is grouted, a bonded grout layer after, a contact again
+//! once the layer cracks.
+//!
 //! Verified by `tests/mechanics_staged.rs` (stress-free birth, restrained
 //! thermal stress in the staged driver, relaxation, equilibrium of the
 //! accumulated stresses with the accumulated loads) on top of the element
-//! tests of `fem::elasticity` and the material tests of `material::creep`.
+//! tests of `fem::elasticity` and the material tests of `material::creep`;
+//! the joints by `tests/joint_two_blocks.rs` and `tests/joint_friction.rs`.
 
+pub mod contact_step;
 pub mod joints;
+pub mod live;
 pub mod model;
 
 pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};

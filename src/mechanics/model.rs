@@ -1,22 +1,20 @@
 //! The mechanical model of the live elements and its incremental step.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8::FACES;
-use crate::fem::{
-    nested_dissection, CholeskySolver, ElementError, Ordering, Pattern, SolveError, SparseSym,
-};
-use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
+use crate::fem::{ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind};
 use crate::scene::{Effect, Scene};
 
-use super::joints::{build_points, JointPoint, JointPointState, PointState};
+use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
+use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
+use super::live::{LiveError, LiveSystem};
 
 /// Gravity [m/s²].
 pub const GRAVITY: f64 = 9.81;
@@ -49,6 +47,10 @@ pub enum MechError {
         day: f64,
         source: crate::joint::ContactError,
     },
+    #[error("joints on day {day:.3}: {source}")]
+    Joints { day: f64, source: JointStepError },
+    #[error("mechanical unknowns on day {day:.3}: {source}")]
+    Live { day: f64, source: LiveError },
 }
 
 /// Prescribed zero displacement increments: (node, component 0..3).
@@ -87,6 +89,10 @@ pub struct MechStats {
     pub seconds_numeric: f64,
     pub seconds_solve: f64,
     pub seconds_assembly: f64,
+    /// contact solves of the joints
+    pub seconds_joints: f64,
+    /// contact iterations (active-set passes or cone-program solves)
+    pub contact_iterations: usize,
 }
 
 /// Checkpointable mechanical state.
@@ -112,17 +118,6 @@ pub struct MechState {
     pub f_contact: Vec<f64>,
 }
 
-struct LiveMech {
-    dofs: Vec<u32>,
-    index_of: Vec<u32>,
-    elems: Vec<u32>,
-    pattern: Arc<Pattern>,
-    solver: CholeskySolver,
-    fixed: Vec<bool>,
-}
-
-const NONE: u32 = u32::MAX;
-
 /// The staged mechanical model.
 pub struct MechanicsModel {
     gauss: Vec<[SolidGauss; 8]>,
@@ -145,12 +140,14 @@ pub struct MechanicsModel {
     lift_elems: std::collections::HashMap<(u32, u32), Vec<u32>>,
     supported: Vec<bool>,
     wet_faces: Vec<(u32, u8)>,
-    sys: Option<LiveMech>,
+    sys: Option<LiveSystem>,
     dirty: bool,
     /// contact points of the joints (the `joints` effect)
     pub points: Vec<JointPoint>,
-    friction: FrictionModel,
+    joint_settings: JointSolveSettings,
     initial_gap: f64,
+    grout_moduli: [f64; 3],
+    grout_min_thickness: f64,
     pub state: MechState,
     pub stats: MechStats,
 }
@@ -229,13 +226,29 @@ impl MechanicsModel {
             Vec::new()
         };
         let j = &scene.joints;
-        let friction = if j.mu_static == 0.0 {
-            FrictionModel::Frictionless
-        } else {
-            FrictionModel::Coulomb {
-                mu_s: j.mu_static,
-                mu_k: j.mu_kinetic,
-            }
+        // Gaps are compared to 1e-10 of the model's size, forces to 1e-9 of
+        // the step's largest force: the same decisions in m/N and mm/MPa units.
+        let (lo, hi) = mesh.nodes.iter().fold(
+            ([f64::MAX; 3], [f64::MIN; 3]),
+            |(lo, hi), p| {
+                (
+                    std::array::from_fn(|k| lo[k].min(p[k])),
+                    std::array::from_fn(|k| hi[k].max(p[k])),
+                )
+            },
+        );
+        let size = (0..3)
+            .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let joint_settings = JointSolveSettings {
+            method: scene.solver.contact,
+            mu_static: j.mu_static,
+            mu_kinetic: j.mu_kinetic,
+            max_iterations: scene.solver.contact_max_iterations as usize,
+            gap_tolerance: 1e-10 * size,
+            force_tolerance: 1e-9,
+            bond_strength: j.bond_strength_pa,
         };
         let n_creep = creep_law.as_ref().map_or(0, |l| l.n_terms());
         let mut model = MechanicsModel {
@@ -270,18 +283,16 @@ impl MechanicsModel {
                 .collect(),
             sys: None,
             dirty: true,
-            friction,
+            joint_settings,
             initial_gap: j.initial_gap_m,
+            grout_moduli: [
+                j.grout_shear_modulus_pa,
+                j.grout_shear_modulus_pa,
+                j.grout_modulus_pa,
+            ],
+            grout_min_thickness: j.grout_min_thickness_m,
             state: MechState {
-                joints: vec![
-                    JointPointState {
-                        paired: false,
-                        gap: 0.0,
-                        force: [0.0; 3],
-                        state: PointState::Open
-                    };
-                    points.len()
-                ],
+                joints: vec![JointPointState::UNPAIRED; points.len()],
                 f_contact: vec![0.0; 3 * mesh.nodes.len()],
                 u: vec![0.0; 3 * mesh.nodes.len()],
                 live: vec![false; n_el],
@@ -322,56 +333,76 @@ impl MechanicsModel {
         }
     }
 
-    fn rebuild(&mut self) -> Result<(), SolveError> {
+    /// Numbers the live unknowns (nodes and joint pairs) and analyses the
+    /// pattern; pairs whose second node has just been born start open with
+    /// the scene's initial gap.
+    fn rebuild(&mut self) -> Result<(), LiveError> {
         let t = Instant::now();
         let n_nodes = self.node_xyz.len();
-        let mut index_of = vec![NONE; 3 * n_nodes];
-        let mut dofs = Vec::new();
-        let mut elems = Vec::new();
-        let mut local = Vec::new();
-        for e in 0..self.elements.len() {
-            if !self.state.live[e] {
-                continue;
+        let mut node_live = vec![false; n_nodes];
+        for (e, conn) in self.elements.iter().enumerate() {
+            if self.state.live[e] {
+                conn.iter().for_each(|&k| node_live[k as usize] = true);
             }
-            let gd = elasticity::element_dofs(&self.elements[e]);
-            let mut ld = [0u32; 24];
-            for (k, &d) in gd.iter().enumerate() {
-                if index_of[d as usize] == NONE {
-                    index_of[d as usize] = dofs.len() as u32;
-                    dofs.push(d);
-                }
-                ld[k] = index_of[d as usize];
-            }
-            elems.push(e as u32);
-            local.push(ld);
         }
-        let n = dofs.len();
-        let pattern = Arc::new(Pattern::new(n, &local));
-        let xyz: Vec<[f64; 3]> = dofs
+        let pair_live: Vec<bool> = self
+            .points
             .iter()
-            .map(|&d| self.node_xyz[d as usize / 3])
+            .map(|p| node_live[p.a as usize] && node_live[p.b as usize])
             .collect();
-        let ordering = Ordering::Custom(nested_dissection(&pattern, &xyz, 64));
-        let par = if n < 30_000 {
-            faer::Par::Seq
-        } else {
-            faer::Par::rayon(0)
-        };
-        let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
-        let fixed = dofs.iter().map(|&d| self.supported[d as usize]).collect();
+        for (p, &on) in pair_live.iter().enumerate() {
+            let st = &mut self.state.joints[p];
+            if on && !st.paired {
+                *st = JointPointState {
+                    paired: true,
+                    gap: self.initial_gap,
+                    ..JointPointState::UNPAIRED
+                };
+            }
+        }
+        let sys = LiveSystem::build(
+            &self.elements,
+            &self.state.live,
+            &self.k_unit,
+            &self.points,
+            &pair_live,
+            &self.supported,
+            n_nodes,
+        )?;
         self.stats.symbolic += 1;
-        self.stats.max_dofs = self.stats.max_dofs.max(n);
+        self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
-        self.sys = Some(LiveMech {
-            dofs,
-            index_of,
-            elems,
-            pattern,
-            solver,
-            fixed,
-        });
+        self.sys = Some(sys);
         self.dirty = false;
         Ok(())
+    }
+
+    /// Grouts zone `zone` of joint `joint` on `day`: each of its live points
+    /// becomes a grout layer (eqs. 28–29 of the seed paper) whose reference is
+    /// the present deformed geometry, whose thickness is the present aperture
+    /// (at least the scene's floor) and which keeps the present contact force.
+    /// Returns the number of points grouted.
+    pub fn grout(&mut self, joint: u32, zone: u32, day: f64) -> usize {
+        let mut n = 0;
+        for (p, pt) in self.points.iter().enumerate() {
+            let st = &mut self.state.joints[p];
+            if pt.joint != joint || pt.zone != zone || !st.paired || st.grout.is_some() {
+                continue;
+            }
+            let aperture = st.gap.max(0.0);
+            let thickness = aperture.max(self.grout_min_thickness);
+            st.grout = Some(Grout {
+                day,
+                aperture,
+                thickness,
+                stiffness: self.grout_moduli.map(|d| pt.area * d / thickness),
+                cracked_day: None,
+            });
+            st.gap = 0.0;
+            st.state = PointState::Grouted;
+            n += 1;
+        }
+        n
     }
 
     fn coefficients(&self, e: usize, t0: f64, t1: f64) -> Result<StepCoefficients, MechError> {
@@ -450,19 +481,22 @@ impl MechanicsModel {
     ) -> Result<(), MechError> {
         if self.dirty {
             self.rebuild()
-                .map_err(|source| MechError::Solve { day: t1, source })?;
+                .map_err(|source| MechError::Live { day: t1, source })?;
         }
         let t_asm = Instant::now();
         let sys = self.sys.as_ref().expect("built");
-        let n = sys.dofs.len();
+        let n = sys.n;
         let mut a = SparseSym::new(sys.pattern.clone());
         let mut b = vec![0.0; n];
-        let mut coeffs = Vec::with_capacity(sys.elems.len());
-        let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elems.len());
-        for (slot, &e) in sys.elems.iter().enumerate() {
-            let e = e as usize;
+        let mut coeffs = Vec::with_capacity(sys.elements.len());
+        let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
+        for (slot, el) in sys.elements.iter().enumerate() {
+            let e = el.elem as usize;
             let c = self.coefficients(e, t0, t1)?;
-            a.add_element_scaled(slot, c.e_eff, &self.k_unit[e]);
+            match &el.k_unit {
+                Some(k) => a.add_element_scaled(slot, c.e_eff, k),
+                None => a.add_element_scaled(slot, c.e_eff, &self.k_unit[e]),
+            }
             // Strains the step imposes at constant stress: creep, thermal, autogenous.
             let mut eps = [[0.0; 6]; 8];
             if !self.state.creep.is_empty() && self.concrete[e] {
@@ -491,11 +525,10 @@ impl MechanicsModel {
                     eps[g][k] += volumetric[g];
                 }
             }
-            let d = elasticity::isotropic_d(c.e_eff, self.nu[e]);
-            let load = elasticity::initial_strain_load(&self.gauss[e], &d, &eps);
-            let gd = elasticity::element_dofs(&self.elements[e]);
-            for k in 0..24 {
-                b[sys.index_of[gd[k] as usize] as usize] += load[k];
+            if eps.iter().any(|g| g.iter().any(|&v| v != 0.0)) {
+                let d = elasticity::isotropic_d(c.e_eff, self.nu[e]);
+                let load = elasticity::initial_strain_load(&self.gauss[e], &d, &eps);
+                sys.add_element_vector(slot, &load, &self.points, &mut b);
             }
             coeffs.push(c);
             pseudo.push(eps);
@@ -503,8 +536,8 @@ impl MechanicsModel {
         // External load increments: self-weight of the newborn, water.
         let mut df_ext = vec![0.0; self.state.u.len()];
         if self.self_weight {
-            for &e in &sys.elems {
-                let e = e as usize;
+            for el in &sys.elements {
+                let e = el.elem as usize;
                 if !self.state.weight_applied[e] {
                     let w = elasticity::body_force_at(
                         &self.gauss[e],
@@ -521,47 +554,42 @@ impl MechanicsModel {
         for i in 0..water.len() {
             df_ext[i] += water[i] - self.state.water_load[i];
         }
-        for (i, &d) in sys.dofs.iter().enumerate() {
-            b[i] += df_ext[d as usize];
-        }
-        a.apply_dirichlet(&sys.fixed);
+        let ext = sys.reduce(&df_ext, &self.points);
         for i in 0..n {
-            if sys.fixed[i] {
-                b[i] = 0.0;
-            }
+            b[i] += ext[i];
         }
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
 
-        let sys = self.sys.as_mut().expect("built");
-        let t_num = Instant::now();
-        sys.solver
-            .factorize(&a)
-            .map_err(|source| MechError::Solve { day: t1, source })?;
-        self.stats.numeric += 1;
-        self.stats.seconds_numeric += t_num.elapsed().as_secs_f64();
-        let t_solve = Instant::now();
-        let mut x = b.clone();
-        sys.solver
-            .solve_in_place(&mut x)
-            .map_err(|source| MechError::Solve { day: t1, source })?;
-        self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
-        let residual = crate::fem::relative_residual(&a, &x, &b);
-        if !(residual <= RESIDUAL_TOLERANCE) {
-            return Err(MechError::Residual { day: t1, residual });
-        }
-        if !self.points.is_empty() {
-            x = self.solve_joints(&x, t1)?;
-        }
+        let x = if sys.pairs.is_empty() {
+            self.solve_plain(a, b, t1)?
+        } else {
+            let t_joint = Instant::now();
+            let sys = self.sys.as_mut().expect("built");
+            let step = StepSystem {
+                a: &a,
+                b: &b,
+                points: &self.points,
+                day: t1,
+            };
+            let out = contact_step::solve(&step, sys, &mut self.state.joints, &self.joint_settings)
+                .map_err(|source| MechError::Joints { day: t1, source })?;
+            self.stats.numeric += out.factorizations;
+            self.stats.seconds_numeric += out.seconds_numeric;
+            self.stats.contact_iterations += out.iterations;
+            self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
+            out.x
+        };
 
-        // Commit: displacements, stresses, creep states, loads.
+        // Commit: displacements, stresses, creep states, loads, contact forces.
         let sys = self.sys.as_ref().expect("built");
         let mut du = vec![0.0; self.state.u.len()];
-        for (i, &d) in sys.dofs.iter().enumerate() {
-            du[d as usize] = x[i];
-            self.state.u[d as usize] += x[i];
+        sys.expand(&x, &self.points, &mut du);
+        // du is zero off the live nodes.
+        for (u, d) in self.state.u.iter_mut().zip(&du) {
+            *u += d;
         }
-        for (slot, &e) in sys.elems.iter().enumerate() {
-            let e = e as usize;
+        for (slot, el) in sys.elements.iter().enumerate() {
+            let e = el.elem as usize;
             let gd = elasticity::element_dofs(&self.elements[e]);
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
@@ -588,127 +616,75 @@ impl MechanicsModel {
             self.state.f_ext[i] += df_ext[i];
         }
         self.state.water_load = water;
-        self.stats.steps += 1;
-        Ok(())
-    }
-
-    /// Joint contact of the step: given the free increment `x0` (no change of
-    /// contact forces), finds the total contact forces of the live points
-    /// from the condensed problem u = b + W r (W = C A⁻¹ Cᵀ by multi-column
-    /// solves on the step's factor, `joint::solve`), and returns
-    /// Δu = x0 + A⁻¹Cᵀ(r − r_old).
-    fn solve_joints(&mut self, x0: &[f64], day: f64) -> Result<Vec<f64>, MechError> {
-        let sys = self.sys.as_ref().expect("built");
-        let n = sys.dofs.len();
-        let live: Vec<usize> = (0..self.points.len())
-            .filter(|&p| {
-                let (a, b) = (self.points[p].a as usize, self.points[p].b as usize);
-                sys.index_of[3 * a] != NONE && sys.index_of[3 * b] != NONE
-            })
-            .collect();
-        if live.is_empty() {
-            return Ok(x0.to_vec());
-        }
-        for &p in &live {
-            let st = &mut self.state.joints[p];
-            if !st.paired {
-                *st = JointPointState {
-                    paired: true,
-                    gap: self.initial_gap,
-                    force: [0.0; 3],
-                    state: PointState::Open,
-                };
-            }
-        }
-        // Cᵀ: column 3q+k = relative displacement of B − A along local axis k.
-        let m = 3 * live.len();
-        let mut ct = faer::Mat::<f64>::zeros(n, m);
-        for (q, &p) in live.iter().enumerate() {
-            let pt = &self.points[p];
-            let axes = [pt.frame.t1, pt.frame.t2, pt.frame.n];
-            for (k, e) in axes.iter().enumerate() {
-                for c in 0..3 {
-                    let ib = sys.index_of[3 * pt.b as usize + c] as usize;
-                    let ia = sys.index_of[3 * pt.a as usize + c] as usize;
-                    if !sys.fixed[ib] {
-                        ct[(ib, 3 * q + k)] += e[c];
-                    }
-                    if !sys.fixed[ia] {
-                        ct[(ia, 3 * q + k)] -= e[c];
-                    }
-                }
-            }
-        }
-        let mut minv_ct = ct.clone();
-        sys.solver
-            .solve_columns(&mut minv_ct)
-            .map_err(|source| MechError::Solve { day, source })?;
-        let w_faer = ct.transpose() * &minv_ct;
-        let w = nalgebra::DMatrix::from_fn(m, m, |i, j| 0.5 * (w_faer[(i, j)] + w_faer[(j, i)]));
-        let r_old: Vec<f64> = live
-            .iter()
-            .flat_map(|&p| self.state.joints[p].force)
-            .collect();
-        // Free increment with the old contact forces removed.
-        let mut du0 = x0.to_vec();
-        for i in 0..n {
-            du0[i] -= (0..m).map(|k| minv_ct[(i, k)] * r_old[k]).sum::<f64>();
-        }
-        let mut bvec = vec![0.0; m];
-        for k in 0..m {
-            bvec[k] = (0..n).map(|i| ct[(i, k)] * du0[i]).sum::<f64>();
-        }
-        for (q, &p) in live.iter().enumerate() {
-            bvec[3 * q + 2] += self.state.joints[p].gap;
-        }
-        let friction = vec![self.friction; live.len()];
-        let problem = ContactProblem::new(&w, &bvec, &friction);
-        let sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))
-            .map_err(|source| MechError::Contact { day, source })?;
-        let mut x = du0;
-        for i in 0..n {
-            x[i] += (0..m).map(|k| minv_ct[(i, k)] * sol.r[k]).sum::<f64>();
-        }
-        // Contact forces on the nodes (total), for the equilibrium check.
         self.state.f_contact.iter_mut().for_each(|f| *f = 0.0);
-        for (q, &p) in live.iter().enumerate() {
-            let pt = &self.points[p];
-            let st = &mut self.state.joints[p];
-            st.force = [sol.r[3 * q], sol.r[3 * q + 1], sol.r[3 * q + 2]];
-            st.gap = sol.u[3 * q + 2];
-            st.state = sol.states[q].into();
+        for (p, pt) in self.points.iter().enumerate() {
+            let st = &self.state.joints[p];
+            if !st.paired {
+                continue;
+            }
             let global = pt.frame.to_global(st.force);
             for c in 0..3 {
                 self.state.f_contact[3 * pt.b as usize + c] += global[c];
                 self.state.f_contact[3 * pt.a as usize + c] -= global[c];
             }
         }
+        self.stats.steps += 1;
+        Ok(())
+    }
+
+    /// The step without joints: supports only, one factorisation, one solve.
+    fn solve_plain(&mut self, mut a: SparseSym, mut b: Vec<f64>, day: f64) -> Result<Vec<f64>, MechError> {
+        let sys = self.sys.as_mut().expect("built");
+        a.apply_dirichlet(&sys.supported);
+        for i in 0..sys.n {
+            if sys.supported[i] {
+                b[i] = 0.0;
+            }
+        }
+        let t_num = Instant::now();
+        sys.solver
+            .factorize(&a)
+            .map_err(|source| MechError::Solve { day, source })?;
+        self.stats.numeric += 1;
+        self.stats.seconds_numeric += t_num.elapsed().as_secs_f64();
+        let t_solve = Instant::now();
+        let mut x = b.clone();
+        sys.solver
+            .solve_in_place(&mut x)
+            .map_err(|source| MechError::Solve { day, source })?;
+        self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+        let residual = crate::fem::relative_residual(&a, &x, &b);
+        if !(residual <= RESIDUAL_TOLERANCE) {
+            return Err(MechError::Residual { day, residual });
+        }
         Ok(x)
     }
 
-    /// ‖Σ Bᵀσ − f_ext‖ / ‖f_ext‖ (or the internal-force scale when no load)
-    /// over the free live dofs: the accumulated stresses must balance the
-    /// accumulated loads.
+    /// ‖Σ Bᵀσ − f_ext − f_contact‖ / ‖f_ext + f_contact‖ (or the internal-force
+    /// scale when no load) over the free live dofs: the accumulated stresses
+    /// must balance the accumulated loads and joint forces.
     pub fn equilibrium_residual(&self) -> f64 {
         let Some(sys) = &self.sys else { return 0.0 };
         let mut fint = vec![0.0; self.state.u.len()];
+        let mut live = vec![false; self.state.u.len()];
         let mut scale = 0.0f64;
-        for &e in &sys.elems {
-            let e = e as usize;
+        for el in &sys.elements {
+            let e = el.elem as usize;
             let f = elasticity::internal_force(&self.gauss[e], &self.state.stress[e]);
             let gd = elasticity::element_dofs(&self.elements[e]);
             for k in 0..24 {
                 fint[gd[k] as usize] += f[k];
+                live[gd[k] as usize] = true;
                 scale = scale.max(f[k].abs());
             }
         }
         let (mut r2, mut f2) = (0.0, 0.0);
-        for (i, &d) in sys.dofs.iter().enumerate() {
-            if sys.fixed[i] {
+        for d in 0..fint.len() {
+            if !live[d] || self.supported[d] {
                 continue;
             }
-            let f = self.state.f_ext[d as usize] + self.state.f_contact[d as usize];
-            let r = fint[d as usize] - f;
+            let f = self.state.f_ext[d] + self.state.f_contact[d];
+            let r = fint[d] - f;
             r2 += r * r;
             f2 += f * f;
         }
@@ -717,6 +693,6 @@ impl MechanicsModel {
 
     /// Number of live mechanical dofs.
     pub fn live_dofs(&self) -> usize {
-        self.sys.as_ref().map_or(0, |s| s.dofs.len())
+        self.sys.as_ref().map_or(0, |s| s.n)
     }
 }

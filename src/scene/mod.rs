@@ -141,6 +141,33 @@ pub struct JointSettings {
     /// Gap of a joint when its second block is poured \[m\], default 0.
     #[serde(default)]
     pub initial_gap_m: f64,
+    /// Normal modulus E_z of the grout layer \[Pa\], default 2.0e10.
+    #[serde(default = "default_grout_modulus")]
+    pub grout_modulus_pa: f64,
+    /// Shear moduli G_x = G_y of the grout layer \[Pa\], default 8.0e9.
+    #[serde(default = "default_grout_shear")]
+    pub grout_shear_modulus_pa: f64,
+    /// Smallest grout-layer thickness \[m\]: a zone grouted with a smaller
+    /// aperture gets this thickness (k = D/t stays finite); default 0.5e-3.
+    #[serde(default = "default_grout_min_thickness")]
+    pub grout_min_thickness_m: f64,
+    /// Tensile bond strength of a grouted joint \[Pa\]: a larger normal tension
+    /// cracks it and the zone is recorded as reopened; default 1.0e6.
+    #[serde(default = "default_bond_strength")]
+    pub bond_strength_pa: f64,
+}
+
+fn default_grout_modulus() -> f64 {
+    2.0e10
+}
+fn default_grout_shear() -> f64 {
+    8.0e9
+}
+fn default_grout_min_thickness() -> f64 {
+    0.5e-3
+}
+fn default_bond_strength() -> f64 {
+    1.0e6
 }
 
 fn default_mu_static() -> f64 {
@@ -288,6 +315,20 @@ pub enum ThermalSolverKind {
     Pcg,
 }
 
+/// How the joint contact of a mechanical step is solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactSolverKind {
+    /// Open/stick/slip state iteration on the whole system, warm started
+    /// from the last step: closed points are exact constraints on the
+    /// relative displacement of their node pair. Default.
+    ActiveSet,
+    /// The condensed joint problem (Delassus operator W from multi-column
+    /// solves) as a cone program for clarabel. Dense in the contact points:
+    /// for checks and small scenes.
+    Qp,
+}
+
 /// Linear-solver settings (`[solver]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -298,6 +339,11 @@ pub struct SolverSettings {
     pub pcg_tolerance: f64,
     /// PCG gives up (an error naming the day) after this many iterations; default 2000.
     pub pcg_max_iterations: u32,
+    /// Joint contact: `active_set` (default) or `qp`.
+    pub contact: ContactSolverKind,
+    /// Contact passes per step before the step fails (an error naming the
+    /// date); default 60.
+    pub contact_max_iterations: u32,
 }
 
 impl Default for SolverSettings {
@@ -306,6 +352,8 @@ impl Default for SolverSettings {
             thermal: ThermalSolverKind::Cholesky,
             pcg_tolerance: 1e-12,
             pcg_max_iterations: 2000,
+            contact: ContactSolverKind::ActiveSet,
+            contact_max_iterations: 60,
         }
     }
 }
@@ -326,6 +374,12 @@ impl SolverSettings {
             return Err((
                 "solver.pcg_max_iterations".into(),
                 "solver.pcg_max_iterations must be >= 1, got 0".into(),
+            ));
+        }
+        if self.contact_max_iterations == 0 {
+            return Err((
+                "solver.contact_max_iterations".into(),
+                "solver.contact_max_iterations must be >= 1, got 0".into(),
             ));
         }
         Ok(())

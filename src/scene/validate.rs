@@ -61,6 +61,11 @@ pub(super) fn validate(s: &Scene) -> Check {
         ));
     }
 
+    positive("joints.grout_modulus_pa", j.grout_modulus_pa)?;
+    positive("joints.grout_shear_modulus_pa", j.grout_shear_modulus_pa)?;
+    positive("joints.grout_min_thickness_m", j.grout_min_thickness_m)?;
+    positive("joints.bond_strength_pa", j.bond_strength_pa)?;
+
     // Concrete.
     let c = &s.concrete;
     positive("concrete.density_kg_m3", c.density_kg_m3)?;

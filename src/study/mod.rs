@@ -94,6 +94,22 @@ pub fn perf(
                 "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations",
                 "", load_s, sim.day, t.max_dofs, t.pcg_iterations
             );
+            if let Some(m) = stats.mechanics {
+                println!(
+                    "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s; {:.1} ms/step",
+                    "",
+                    m.steps,
+                    m.max_dofs,
+                    m.symbolic,
+                    m.seconds_symbolic,
+                    m.numeric,
+                    m.seconds_numeric,
+                    m.seconds_solve,
+                    m.seconds_assembly,
+                    m.seconds_joints,
+                    1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints) / m.steps.max(1) as f64
+                );
+            }
             if scene.any_thermal() {
                 let full = full_dam_step_cost(&scene, &mesh, 10)?;
                 println!(
