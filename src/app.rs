@@ -119,6 +119,7 @@ pub struct RunSummary {
     pub elements: usize,
     pub thermal_dofs: usize,
     pub temperature_rows: usize,
+    pub aperture_rows: usize,
     pub snapshots: usize,
 }
 
@@ -141,6 +142,20 @@ pub fn run(
     } else {
         0
     };
+    let aperture_rows = if sim.joint_records.columns.is_empty() {
+        0
+    } else {
+        let path = staging.path().join("apertures.csv");
+        let epoch = inputs.scene.epoch;
+        let mut extra: std::collections::BTreeSet<i64> = inputs
+            .schedules
+            .grouting
+            .iter()
+            .map(|g| (g.planned - epoch).num_days())
+            .collect();
+        extra.extend(inputs.scene.output.snapshots.iter().map(|d| (*d - epoch).num_days()));
+        output::apertures::write(&path, epoch, &sim.joint_records, &extra).map_err(io_err(&path))?
+    };
     let pvd = fields.join("fields.pvd");
     mesh::vtu::write_pvd(&pvd, &sim.snapshots).map_err(io_err(&pvd))?;
     let summary = staging.path().join("run.txt");
@@ -153,6 +168,7 @@ pub fn run(
         elements: inputs.mesh.elements.len(),
         thermal_dofs: inputs.mesh.n_thermal_dofs,
         temperature_rows,
+        aperture_rows,
         snapshots,
     })
 }
@@ -174,6 +190,12 @@ fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
         s += &format!(
             "thermal: {} symbolic, {} numeric factorisations, {} assemblies, {} pipe terms, max live dofs {}\n",
             t.symbolic, t.numeric, t.assemblies, t.pipe_terms, t.max_dofs
+        );
+    }
+    if let Some(m) = &stats.mechanics {
+        s += &format!(
+            "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes, max live dofs {}\n",
+            m.steps, m.symbolic, m.numeric, m.contact_iterations, m.max_dofs
         );
     }
     s

@@ -9,7 +9,7 @@ use crate::fem::hex8::FACES;
 use crate::fem::{ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
-use crate::mesh::{Mesh, Part, SurfaceKind};
+use crate::mesh::{Mesh, Part, SurfaceKind, ZonePoint};
 use crate::scene::{Effect, Scene};
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
@@ -47,6 +47,8 @@ pub enum MechError {
         day: f64,
         source: crate::joint::ContactError,
     },
+    #[error("prescribed displacement on node {node} component {comp}: the dof is not supported, or is on side b of a joint")]
+    NotSupported { node: u32, comp: u8 },
     #[error("joints on day {day:.3}: {source}")]
     Joints { day: f64, source: JointStepError },
     #[error("mechanical unknowns on day {day:.3}: {source}")]
@@ -139,12 +141,18 @@ pub struct MechanicsModel {
     thermal_dof: Vec<u32>,
     lift_elems: std::collections::HashMap<(u32, u32), Vec<u32>>,
     supported: Vec<bool>,
+    /// displacement increments of supported dofs for the next step (global dof, value)
+    prescribed: Vec<(u32, f64)>,
     wet_faces: Vec<(u32, u8)>,
     sys: Option<LiveSystem>,
     dirty: bool,
     /// contact points of the joints (the `joints` effect)
     pub points: Vec<JointPoint>,
     joint_settings: JointSolveSettings,
+    /// joint point of each side-a node
+    point_of_a: std::collections::HashMap<u32, u32>,
+    /// joint points of each (joint, zone)
+    zone_points: std::collections::HashMap<(u32, u32), Vec<u32>>,
     initial_gap: f64,
     grout_moduli: [f64; 3],
     grout_min_thickness: f64,
@@ -275,6 +283,7 @@ impl MechanicsModel {
             thermal_dof: mesh.thermal_dof.clone(),
             lift_elems,
             supported,
+            prescribed: Vec::new(),
             wet_faces: mesh
                 .surfaces
                 .iter()
@@ -284,6 +293,18 @@ impl MechanicsModel {
             sys: None,
             dirty: true,
             joint_settings,
+            point_of_a: points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.a, i as u32))
+                .collect(),
+            zone_points: points.iter().enumerate().fold(
+                std::collections::HashMap::new(),
+                |mut m, (i, p)| {
+                    m.entry((p.joint, p.zone)).or_insert_with(Vec::new).push(i as u32);
+                    m
+                },
+            ),
             initial_gap: j.initial_gap_m,
             grout_moduli: [
                 j.grout_shear_modulus_pa,
@@ -374,6 +395,17 @@ impl MechanicsModel {
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         self.sys = Some(sys);
         self.dirty = false;
+        Ok(())
+    }
+
+    /// Prescribes the displacement increment of a supported dof for the next
+    /// step (a jack, a settlement; the supports are otherwise fixed).
+    pub fn prescribe(&mut self, node: u32, comp: u8, increment: f64) -> Result<(), MechError> {
+        let g = 3 * node as usize + comp as usize;
+        if comp > 2 || !self.supported.get(g).copied().unwrap_or(false) {
+            return Err(MechError::NotSupported { node, comp });
+        }
+        self.prescribed.push((g as u32, increment));
         Ok(())
     }
 
@@ -558,16 +590,29 @@ impl MechanicsModel {
         for i in 0..n {
             b[i] += ext[i];
         }
+        let mut prescribed = vec![0.0; n];
+        for &(g, v) in &self.prescribed {
+            let i = sys.index_of[g as usize];
+            if i == super::live::NONE {
+                return Err(MechError::NotSupported {
+                    node: g / 3,
+                    comp: (g % 3) as u8,
+                });
+            }
+            prescribed[i as usize] = v;
+        }
+        self.prescribed.clear();
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
 
         let x = if sys.pairs.is_empty() {
-            self.solve_plain(a, b, t1)?
+            self.solve_plain(a, b, &prescribed, t1)?
         } else {
             let t_joint = Instant::now();
             let sys = self.sys.as_mut().expect("built");
             let step = StepSystem {
                 a: &a,
                 b: &b,
+                prescribed: &prescribed,
                 points: &self.points,
                 day: t1,
             };
@@ -633,14 +678,15 @@ impl MechanicsModel {
     }
 
     /// The step without joints: supports only, one factorisation, one solve.
-    fn solve_plain(&mut self, mut a: SparseSym, mut b: Vec<f64>, day: f64) -> Result<Vec<f64>, MechError> {
+    fn solve_plain(
+        &mut self,
+        mut a: SparseSym,
+        mut b: Vec<f64>,
+        prescribed: &[f64],
+        day: f64,
+    ) -> Result<Vec<f64>, MechError> {
         let sys = self.sys.as_mut().expect("built");
-        a.apply_dirichlet(&sys.supported);
-        for i in 0..sys.n {
-            if sys.supported[i] {
-                b[i] = 0.0;
-            }
-        }
+        a.apply_dirichlet_with_rhs(&sys.supported, prescribed, &mut b);
         let t_num = Instant::now();
         sys.solver
             .factorize(&a)
@@ -689,6 +735,42 @@ impl MechanicsModel {
             f2 += f * f;
         }
         r2.sqrt() / f2.sqrt().max(scale).max(f64::MIN_POSITIVE)
+    }
+
+    /// Aperture [m] and state label at a grouting-zone point (bilinear over
+    /// the joint points of its face; a node shared with the rock is closed).
+    /// None until both blocks exist there.
+    pub fn point_aperture(&self, mesh: &Mesh, zp: &ZonePoint) -> Option<(f64, &'static str)> {
+        let pair = &mesh.face_pairs[zp.pair as usize];
+        let n = crate::mesh::quad_shape(zp.s, zp.t);
+        let (mut value, mut label, mut best) = (0.0, "stick", -1.0);
+        for k in 0..4 {
+            if pair.nodes_a[k] == pair.nodes_b[k] {
+                continue;
+            }
+            let p = *self.point_of_a.get(&pair.nodes_a[k])? as usize;
+            let st = &self.state.joints[p];
+            if !st.paired {
+                return None;
+            }
+            value += n[k] * st.aperture();
+            if n[k] > best {
+                best = n[k];
+                label = st.label();
+            }
+        }
+        Some((value, label))
+    }
+
+    /// Smallest aperture over the points of a zone: (aperture [m], state, node a).
+    pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<(f64, &'static str, u32)> {
+        self.zone_points
+            .get(&(joint, zone))?
+            .iter()
+            .map(|&p| (p as usize, &self.state.joints[p as usize]))
+            .filter(|(_, st)| st.paired)
+            .map(|(p, st)| (st.aperture(), st.label(), self.points[p].a))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
     }
 
     /// Number of live mechanical dofs.

@@ -4,6 +4,7 @@
 
 pub mod run_dir;
 pub mod snapshot;
+pub mod apertures;
 pub mod temperatures;
 
 pub use run_dir::RunDir;

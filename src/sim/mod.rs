@@ -24,6 +24,12 @@ pub enum SimError {
     Thermal(#[from] ThermalError),
     #[error(transparent)]
     Mechanics(#[from] MechError),
+    #[error("mechanical step {step} ending {date}: {source}")]
+    MechanicsAt {
+        step: usize,
+        date: NaiveDate,
+        source: MechError,
+    },
     #[error("the scene has the reservoir_temperature effect but {0} has no reservoir.csv")]
     NoReservoir(String),
     #[error("writing snapshot {path}: {source}")]
@@ -40,6 +46,41 @@ pub struct ZoneRecords {
     pub points: Vec<(u32, u32, PointKind)>,
     /// (day, value per point; NaN where the point's concrete is not yet poured)
     pub rows: Vec<(f64, Vec<f64>)>,
+}
+
+/// Where a joint column samples its zone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointColumnKind {
+    /// a zone point (index into `Mesh::zone_points`)
+    Point { kind: PointKind, index: u32 },
+    /// the smallest aperture over the zone's points
+    Min,
+}
+
+impl JointColumnKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointColumnKind::Point { kind, .. } => kind.as_str(),
+            JointColumnKind::Min => "min",
+        }
+    }
+}
+
+/// One joint sample: aperture [m], state label, temperature [°C] (NaN without a thermal model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointSample {
+    pub aperture: f64,
+    pub state: &'static str,
+    pub temperature: f64,
+}
+
+/// Aperture history at the grouting-zone points and zone minima, one row
+/// per whole day; None where the zone's blocks do not both exist yet.
+#[derive(Debug, Clone, Default)]
+pub struct JointRecords {
+    /// (joint, zone, kind) per column
+    pub columns: Vec<(u32, u32, JointColumnKind)>,
+    pub rows: Vec<(f64, Vec<Option<JointSample>>)>,
 }
 
 /// Counters of one run: which systems were assembled and solved.
@@ -64,9 +105,14 @@ pub struct Simulation<'a> {
     pub day: f64,
     ladder: Ladder,
     pub records: ZoneRecords,
+    pub joint_records: JointRecords,
     pub snapshots: Vec<(f64, String)>,
     pours_done: usize,
     steps: usize,
+    /// start of the pending mechanical step and the temperatures then
+    mech_t0: f64,
+    mech_temps0: Option<Vec<f64>>,
+    mech_steps: usize,
 }
 
 impl<'a> Simulation<'a> {
@@ -103,6 +149,15 @@ impl<'a> Simulation<'a> {
                 if let Some(end) = st.end_day {
                     tl.days.entry(end as i64).or_default().stage_change = true;
                 }
+            }
+        }
+        if scene.has(Effect::Joints) {
+            for g in &schedules.grouting {
+                tl.days
+                    .entry(day(g.planned) as i64)
+                    .or_default()
+                    .grouting
+                    .push((g.joint, g.zone));
             }
         }
         for &d in &scene.output.snapshots {
@@ -161,6 +216,23 @@ impl<'a> Simulation<'a> {
             .iter()
             .map(|p| (p.joint, p.zone, p.kind))
             .collect();
+        let mut joint_records = JointRecords::default();
+        if mechanics.as_ref().is_some_and(|m| !m.points.is_empty()) {
+            for z in &mesh.zones {
+                for (i, p) in mesh.zone_points.iter().enumerate() {
+                    if p.joint == z.joint && p.zone == z.zone {
+                        let kind = JointColumnKind::Point {
+                            kind: p.kind,
+                            index: i as u32,
+                        };
+                        joint_records.columns.push((z.joint, z.zone, kind));
+                    }
+                }
+                joint_records
+                    .columns
+                    .push((z.joint, z.zone, JointColumnKind::Min));
+            }
+        }
         Ok(Simulation {
             scene,
             mesh,
@@ -171,9 +243,13 @@ impl<'a> Simulation<'a> {
             levels,
             day: 0.0,
             records,
+            joint_records,
             snapshots: Vec::new(),
             pours_done: 0,
             steps: 0,
+            mech_t0: 0.0,
+            mech_temps0: None,
+            mech_steps: 0,
         })
     }
 
@@ -190,7 +266,13 @@ impl<'a> Simulation<'a> {
             pours,
             stage_change,
             snapshot,
+            grouting,
         } = events;
+        if let Some(m) = self.mechanics.as_mut() {
+            for (joint, zone) in grouting {
+                m.grout(joint, zone, self.day);
+            }
+        }
         let mut restart = stage_change;
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
@@ -226,36 +308,28 @@ impl<'a> Simulation<'a> {
         let start = std::time::Instant::now();
         let end = self.end_day();
         self.apply_events(snapshot_dir)?;
+        self.begin_mechanical_step();
         self.record();
         while self.day < end {
             let next = self.timeline.next_event_after(self.day);
             let dt = self.ladder.next_step(self.day, next);
             let t1 = snap(self.day + dt);
-            let before = match (&self.thermal, &self.mechanics) {
-                (Some(th), Some(_)) => Some(th.state.temperature.clone()),
-                _ => None,
-            };
             if let Some(th) = self.thermal.as_mut() {
                 th.step(self.day, t1)?;
             }
-            if let Some(m) = self.mechanics.as_mut() {
-                let level = self.levels.as_ref().and_then(|l| {
-                    let first = l.first_day()?;
-                    (t1 >= first)
-                        .then(|| l.at(t1.min(l.last_day().unwrap_or(t1))))
-                        .flatten()
-                });
-                let temps = match (&before, &self.thermal) {
-                    (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
-                    _ => None,
-                };
-                m.step(self.day, t1, temps, level)?;
-            }
             self.day = t1;
             self.steps += 1;
+            // Mechanics steps from midnight to midnight (or over the longer
+            // thermal steps): the thermal strain is a difference of states, so
+            // the sub-day thermal steps after a pour add up exactly, and every
+            // pour and grouting date is a midnight.
+            if self.day.fract() == 0.0 || self.day >= end {
+                self.mechanical_step()?;
+            }
             self.ladder.grow(&self.scene.time);
             self.apply_events(snapshot_dir)?;
             if self.day.fract() == 0.0 {
+                self.begin_mechanical_step();
                 self.record();
             }
             progress(self.day, end);
@@ -269,7 +343,41 @@ impl<'a> Simulation<'a> {
         })
     }
 
+    /// Remembers the start of the next mechanical step (after the day's events).
+    fn begin_mechanical_step(&mut self) {
+        if self.mechanics.is_none() {
+            return;
+        }
+        self.mech_t0 = self.day;
+        self.mech_temps0 = self.thermal.as_ref().map(|th| th.state.temperature.clone());
+    }
+
+    fn mechanical_step(&mut self) -> Result<(), SimError> {
+        let Some(m) = self.mechanics.as_mut() else {
+            return Ok(());
+        };
+        let t1 = self.day;
+        let level = self.levels.as_ref().and_then(|l| {
+            let first = l.first_day()?;
+            (t1 >= first)
+                .then(|| l.at(t1.min(l.last_day().unwrap_or(t1))))
+                .flatten()
+        });
+        let temps = match (&self.mech_temps0, &self.thermal) {
+            (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
+            _ => None,
+        };
+        self.mech_steps += 1;
+        m.step(self.mech_t0, t1, temps, level)
+            .map_err(|source| SimError::MechanicsAt {
+                step: self.mech_steps,
+                date: self.scene.epoch + chrono::Duration::days(t1.floor() as i64),
+                source,
+            })
+    }
+
     fn record(&mut self) {
+        self.record_joints();
         let Some(th) = &self.thermal else { return };
         let values = self
             .mesh
@@ -278,6 +386,45 @@ impl<'a> Simulation<'a> {
             .map(|p| th.point_temperature(self.mesh, p).unwrap_or(f64::NAN))
             .collect();
         self.records.rows.push((self.day, values));
+    }
+
+    fn record_joints(&mut self) {
+        let Some(m) = &self.mechanics else { return };
+        if self.joint_records.columns.is_empty() {
+            return;
+        }
+        let node_temp = |node: u32| -> f64 {
+            self.thermal.as_ref().map_or(f64::NAN, |th| {
+                th.state.temperature[self.mesh.thermal_dof[node as usize] as usize]
+            })
+        };
+        let mut row = Vec::with_capacity(self.joint_records.columns.len());
+        for &(joint, zone, kind) in &self.joint_records.columns {
+            let sample = match kind {
+                JointColumnKind::Point { index, .. } => {
+                    let zp = &self.mesh.zone_points[index as usize];
+                    m.point_aperture(self.mesh, zp).map(|(aperture, state)| JointSample {
+                        aperture,
+                        state,
+                        temperature: self
+                            .thermal
+                            .as_ref()
+                            .and_then(|th| th.point_temperature(self.mesh, zp))
+                            .unwrap_or(f64::NAN),
+                    })
+                }
+                JointColumnKind::Min => {
+                    m.zone_min_aperture(joint, zone)
+                        .map(|(aperture, state, node)| JointSample {
+                            aperture,
+                            state,
+                            temperature: node_temp(node),
+                        })
+                }
+            };
+            row.push(sample);
+        }
+        self.joint_records.rows.push((self.day, row));
     }
 
     fn write_snapshot(&mut self, dir: &Path) -> Result<(), SimError> {

@@ -18,6 +18,8 @@ pub struct DayEvents {
     /// a cooling stage starts or ends
     pub stage_change: bool,
     pub snapshot: bool,
+    /// (joint, zone) grouted at the start of the day
+    pub grouting: Vec<(u32, u32)>,
 }
 
 /// Events keyed by whole day.

@@ -23,6 +23,12 @@ pub fn summary_line(s: &RunSummary) -> String {
             t.symbolic, t.numeric, t.assemblies, s.temperature_rows, s.snapshots
         );
     }
+    if let Some(m) = &s.stats.mechanics {
+        out += &format!(
+            "mechanics: {} steps, {} numeric factorisations, {} contact passes; apertures.csv {} rows\n",
+            m.steps, m.numeric, m.contact_iterations, s.aperture_rows
+        );
+    }
     out
 }
 

@@ -631,7 +631,7 @@ impl ThermalModel {
     pub fn point_temperature(&self, mesh: &Mesh, p: &ZonePoint) -> Option<f64> {
         let pair = &mesh.face_pairs[p.pair as usize];
         let sys = self.sys.as_ref()?;
-        let n = bilinear(p.s, p.t);
+        let n = crate::mesh::quad_shape(p.s, p.t);
         let mut value = 0.0;
         for (k, &node) in pair.nodes_a.iter().enumerate() {
             let d = mesh.thermal_dof[node as usize];
@@ -661,14 +661,4 @@ impl ThermalModel {
     pub fn has_pipes(&self) -> bool {
         self.pipe.is_some()
     }
-}
-
-/// Bilinear shape functions on [−1,1]² in the node order of `hex8::FACES`.
-pub fn bilinear(s: f64, t: f64) -> [f64; 4] {
-    [
-        0.25 * (1.0 - s) * (1.0 - t),
-        0.25 * (1.0 + s) * (1.0 - t),
-        0.25 * (1.0 + s) * (1.0 + t),
-        0.25 * (1.0 - s) * (1.0 + t),
-    ]
 }

@@ -1,0 +1,58 @@
+//! `apertures.csv`: `joint,zone,point,date,day,aperture_mm,state,temperature_c`,
+//! for every grouting zone at its upstream, center and downstream points
+//! (mid-zone height) and its minimum over the zone's joint points (`min`;
+//! its temperature is that point's).
+//!
+//! Rows are written weekly (days that are multiples of 7 from the epoch),
+//! on every grouting date and snapshot date, and on the last day; days before
+//! both blocks of a zone exist are skipped. The run keeps the daily history
+//! in memory for the planner.
+
+use std::collections::BTreeSet;
+use std::io::{self, Write};
+use std::path::Path;
+
+use chrono::NaiveDate;
+
+use crate::sim::JointRecords;
+
+/// Writes the file; returns the number of data rows.
+pub fn write(
+    path: &Path,
+    epoch: NaiveDate,
+    records: &JointRecords,
+    extra_days: &BTreeSet<i64>,
+) -> io::Result<usize> {
+    let mut w = io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(
+        w,
+        "joint,zone,point,date,day,aperture_mm,state,temperature_c"
+    )?;
+    let last = records.rows.last().map(|r| r.0);
+    let keep = |day: f64| {
+        let d = day as i64;
+        d % 7 == 0 || extra_days.contains(&d) || Some(day) == last
+    };
+    let mut rows = 0;
+    for (col, &(joint, zone, kind)) in records.columns.iter().enumerate() {
+        for (day, samples) in records.rows.iter().filter(|(d, _)| keep(*d)) {
+            let Some(s) = samples[col] else { continue };
+            let date = epoch + chrono::Duration::days(*day as i64);
+            let temp = if s.temperature.is_nan() {
+                String::new()
+            } else {
+                format!("{:.3}", s.temperature)
+            };
+            writeln!(
+                w,
+                "{joint},{zone},{},{date},{day},{:.4},{},{temp}",
+                kind.as_str(),
+                1e3 * s.aperture,
+                s.state
+            )?;
+            rows += 1;
+        }
+    }
+    w.flush()?;
+    Ok(rows)
+}
