@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use groutready::mechanics::joints::PointState;
-use groutready::mechanics::{MechanicsModel, Supports};
+use groutready::mechanics::MechanicsModel;
 use groutready::mesh::Mesh;
 
 const E: f64 = 3.0e10;
@@ -17,31 +17,6 @@ const L_BLOCK: f64 = 10.0;
 const MECH: &str =
     "modulus = { e0_pa = 3.0e10, a = 1.0e6, b = 1.0 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
 
-/// Walls at both ends (u_x = 0), frictionless base (u_z = 0), one side face
-/// held in y (u_y = 0) so the blocks are free to expand sideways and upwards.
-fn supports(mesh: &Mesh) -> Supports {
-    let xs = mesh.nodes.iter().map(|p| p[0]);
-    let (xmin, xmax) = (
-        xs.clone().fold(f64::MAX, f64::min),
-        xs.fold(f64::MIN, f64::max),
-    );
-    let ymin = mesh.nodes.iter().map(|p| p[1]).fold(f64::MAX, f64::min);
-    let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
-    let mut fixed = vec![];
-    for (i, p) in mesh.nodes.iter().enumerate() {
-        if (p[0] - xmin).abs() < 1e-9 || (p[0] - xmax).abs() < 1e-9 {
-            fixed.push((i as u32, 0));
-        }
-        if (p[1] - ymin).abs() < 1e-9 {
-            fixed.push((i as u32, 1));
-        }
-        if (p[2] - zmin).abs() < 1e-9 {
-            fixed.push((i as u32, 2));
-        }
-    }
-    Supports { fixed }
-}
-
 /// Both blocks poured on day 0 at 20 °C, then a uniform ΔT in one day.
 fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
     let joints = format!("[joints]\nzone_height_m = 3.0\nmu_static = 0.0\nmu_kinetic = 0.0\ninitial_gap_m = {gap0}\n");
@@ -50,7 +25,7 @@ fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
     let j: toml::Table = toml::from_str(&joints).unwrap();
     sc.joints = j["joints"].clone().try_into().unwrap();
     let mesh = blocks_mesh(&sc);
-    let mut m = MechanicsModel::new(&mesh, &sc, &supports(&mesh)).unwrap();
+    let mut m = MechanicsModel::new(&mesh, &sc, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);
     let t0 = vec![20.0; mesh.n_thermal_dofs];

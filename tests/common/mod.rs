@@ -162,3 +162,29 @@ pub fn assert_rel(got: f64, want: f64, tol: f64, what: &str) {
         "{what}: got {got:e}, want {want:e}, relative error {r:e} > {tol:e}"
     );
 }
+
+/// Walls at both ends (u_x = 0), a frictionless base (u_z = 0) and one side
+/// face held in y (u_y = 0): blocks free to expand sideways and upwards.
+pub fn walls_frictionless_base(mesh: &Mesh) -> groutready::mechanics::Supports {
+    let xs = mesh.nodes.iter().map(|p| p[0]);
+    let (xmin, xmax) = (
+        xs.clone().fold(f64::MAX, f64::min),
+        xs.fold(f64::MIN, f64::max),
+    );
+    let ymin = mesh.nodes.iter().map(|p| p[1]).fold(f64::MAX, f64::min);
+    let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
+    let tol = 1e-9 * (xmax - xmin).abs().max(1.0);
+    let mut fixed = vec![];
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        if (p[0] - xmin).abs() < tol || (p[0] - xmax).abs() < tol {
+            fixed.push((i as u32, 0));
+        }
+        if (p[1] - ymin).abs() < tol {
+            fixed.push((i as u32, 1));
+        }
+        if (p[2] - zmin).abs() < tol {
+            fixed.push((i as u32, 2));
+        }
+    }
+    groutready::mechanics::Supports { fixed }
+}
