@@ -95,6 +95,8 @@ pub struct MechStats {
     pub seconds_joints: f64,
     /// contact iterations (active-set passes or cone-program solves)
     pub contact_iterations: usize,
+    /// largest tension [Pa] left on a joint point kept closed by the flip limit
+    pub kept_closed_tension: f64,
 }
 
 /// Checkpointable mechanical state.
@@ -621,6 +623,7 @@ impl MechanicsModel {
             self.stats.numeric += out.factorizations;
             self.stats.seconds_numeric += out.seconds_numeric;
             self.stats.contact_iterations += out.iterations;
+            self.stats.kept_closed_tension = self.stats.kept_closed_tension.max(out.kept_closed_tension);
             self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
             out.x
         };

@@ -67,6 +67,37 @@ pub fn write(path: &Path, sim: &Simulation<'_>) -> io::Result<()> {
             })
             .collect();
         cell_fields.push(("von_mises_mpa".into(), vm));
+        if !m.points.is_empty() {
+            // On both nodes of each joint pair: aperture [mm], normal
+            // pressure [MPa] and a state code; NaN off the joints.
+            let n = mesh.nodes.len();
+            let (mut aperture, mut pressure, mut code) =
+                (vec![f64::NAN; n], vec![f64::NAN; n], vec![f64::NAN; n]);
+            for (p, pt) in m.points.iter().enumerate() {
+                let st = &m.state.joints[p];
+                if !st.paired {
+                    continue;
+                }
+                let c = match st.label() {
+                    "open" => 1.0,
+                    "stick" => 2.0,
+                    "slip" => 3.0,
+                    "grouted" => 4.0,
+                    _ => 5.0,
+                };
+                for node in [pt.a as usize, pt.b as usize] {
+                    aperture[node] = 1e3 * st.aperture();
+                    pressure[node] = 1e-6 * st.force[2] / pt.area;
+                    code[node] = c;
+                }
+            }
+            point_fields.push(("joint_aperture_mm".into(), aperture));
+            point_fields.push(("joint_pressure_mpa".into(), pressure));
+            point_fields.push((
+                "joint_state_1open_2stick_3slip_4grouted_5reopened".into(),
+                code,
+            ));
+        }
     }
     let pf: Vec<(&str, &[f64])> = point_fields
         .iter()

@@ -102,7 +102,7 @@ pub fn perf(
             );
             if let Some(m) = stats.mechanics {
                 println!(
-                    "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s; {:.1} ms/step",
+                    "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
                     "",
                     m.steps,
                     m.max_dofs,
@@ -113,6 +113,8 @@ pub fn perf(
                     m.seconds_solve,
                     m.seconds_assembly,
                     m.seconds_joints,
+                    m.contact_iterations,
+                    m.kept_closed_tension,
                     1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints) / m.steps.max(1) as f64
                 );
             }
