@@ -27,9 +27,10 @@
 //!   on the joint satisfy F/(G − V) = (tan α + μ)/(1 − μ tan α) = 0.412371,
 //!   with V the vertical reaction of the rear face (see [`incline`] for why
 //!   B needs one; V/G = 2.5 % at the onset of sliding). Measured: 1e-15.
-//! - Two known defects are pinned by ignored tests (they fail today): the
-//!   cone program with a pair component held by supports, and the drift of
-//!   the active set's slip direction over many sliding steps.
+//! - Two former defects are pinned: the cone program with a pair component
+//!   held by supports (now decoupled and pinned to zero force), and the
+//!   active set's slip direction over many sliding steps (now the stick
+//!   trial's direction each step, not the last step's slip).
 
 mod common;
 
@@ -131,10 +132,8 @@ fn joint_totals(m: &MechanicsModel) -> JointTotals {
     };
     for (pt, st) in m.points.iter().zip(&m.state.joints) {
         let g = pt.frame.to_global(st.force);
-        for k in 0..3 {
-            t.local[k] += st.force[k];
-            t.global[k] += g[k];
-        }
+        t.local = std::array::from_fn(|k| t.local[k] + st.force[k]);
+        t.global = std::array::from_fn(|k| t.global[k] + g[k]);
         match st.state {
             PointState::Open => t.open += 1,
             PointState::Stick => t.stick += 1,
@@ -303,7 +302,7 @@ fn check_slide(name: &str, mu_s: f64, mu_k: f64, stick_up_to: f64, steps: &[Slid
         worst = worst.max(close(s.reaction[2], 0.0, n_total, "far-face reaction z"));
         // Points.
         let tau = s.ratio * sigma;
-        let mut weakest: f64 = 0.0;
+        let mut most_loaded: f64 = 0.0;
         for (p, &(f, state, area, y)) in s.points.iter().enumerate() {
             let q = |c: &str| format!("point {p} (y {y}) {c}");
             if slipped {
@@ -324,11 +323,11 @@ fn check_slide(name: &str, mu_s: f64, mu_k: f64, stick_up_to: f64, steps: &[Slid
                     worst = worst.max(close(f[c], want[c], sigma * area, &q("closed-form force")));
                 }
             }
-            weakest = weakest.max(-f[0] / f[2]);
+            most_loaded = most_loaded.max(-f[0] / f[2]);
         }
         eprintln!(
             "sliding block {name} μ_s {mu_s} μ_k {mu_k} step {k}: ratio {:.2}, T/N = {:.12} \
-             (want {:.3}), most loaded point |r_t|/r_n {weakest:.4}, worst error {worst:.1e}, \
+             (want {:.3}), most loaded point |r_t|/r_n {most_loaded:.4}, worst error {worst:.1e}, \
              stick {} slip {}, {} passes",
             s.ratio,
             -j.local[0] / j.local[2],
@@ -580,12 +579,10 @@ fn patch_on_incline_held_across_the_slope_at_the_joint_active_set() {
     check_incline("active_set, joint held in Y", &steps, g);
 }
 
-/// Fails: `condensed_qp` hands the supported relative components (here t1 of
-/// every pair) to the cone program as free contact unknowns of compliance
-/// 1 m/N (the identity rows of the Dirichlet-modified matrix), and its
-/// friction fixed point does not converge (see the report).
+/// The supported relative components (t1 of every pair) are not contact
+/// unknowns of the cone program (they used to enter it with a compliance of
+/// 1 m/N, and its friction fixed point did not converge).
 #[test]
-#[ignore = "qp: supported relative components of a pair enter the cone program"]
 fn patch_on_incline_held_across_the_slope_at_the_joint_qp() {
     let (steps, g) = incline(ContactSolverKind::Qp, HoldY::Joint, &[5e-7; 6]);
     check_incline("qp, joint held in Y", &steps, g);
@@ -602,12 +599,10 @@ fn patch_on_incline_keeps_sliding_up_the_slope_qp() {
     long_slide(ContactSolverKind::Qp, "qp, long slide");
 }
 
-/// Fails: the active set takes each step's friction direction from the
-/// previous step's slip, and a component across the slope grows by a factor
-/// ≈ −20 per step (1 µm steps) from round-off until F/(G − V) is off by 1 %
-/// (see the report).
+/// Each step's friction direction is the stick trial's: taken from the
+/// previous step's slip, a component across the slope grew by a factor ≈ −20
+/// per step (1 µm steps) from round-off until F/(G − V) was off by 1 %.
 #[test]
-#[ignore = "active_set: lagged slip direction is unstable across the slope"]
 fn patch_on_incline_keeps_sliding_up_the_slope_active_set() {
     long_slide(ContactSolverKind::ActiveSet, "active_set, long slide");
 }

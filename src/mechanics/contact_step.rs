@@ -40,8 +40,9 @@ use super::live::LiveSystem;
 
 /// Relative residual above which a linear solve of the contact loop is rejected.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
-/// Open ↔ closed switches of one point within a step after which a closed
-/// point stays closed for the rest of the step. A point whose gap and
+/// Open ↔ closed and slip → stick switches of one point within a step after
+/// which the point may only close or start slipping for the rest of the
+/// step, so the state iteration ends. A point whose gap and
 /// pressure are both near zero can otherwise alternate for ever (seen on the
 /// small dam and the demo); kept closed, its aperture stays exact and it may
 /// carry a small tension (the price, instead of a small overlap).
@@ -195,6 +196,21 @@ pub fn active_set(
     let n = live.n;
     let old: Vec<JointPointState> = states.to_vec();
     let mut work = old.clone();
+    // Return mapping: a point that slipped in the last step starts as a stick
+    // trial; the trial force gives this step's slip direction, and it keeps
+    // slipping if that force exceeds the kinetic (not the static) limit.
+    // A direction carried over from the last step would grow sideways from
+    // step to step (measured ×5–100 per step across an incline).
+    let kinetic: Vec<bool> = live
+        .pairs
+        .iter()
+        .map(|p| old[p.point as usize].state == PointState::Slip)
+        .collect();
+    for (q, p) in live.pairs.iter().enumerate() {
+        if kinetic[q] {
+            work[p.point as usize].state = PointState::Stick;
+        }
+    }
     let f_scale = force_scale(sys.b, live, states);
     let tol_f = s.force_tolerance * f_scale;
     let tol_g = s.gap_tolerance;
@@ -215,6 +231,10 @@ pub fn active_set(
     let mut m = SparseSym::new(sys.a.pattern().clone());
     let mut last_changes = 0;
     let mut anderson = Anderson::new(ANDERSON_DEPTH);
+    let limit: Vec<f64> = kinetic
+        .iter()
+        .map(|&k| if k { s.mu_kinetic } else { s.mu_static })
+        .collect();
     let mut flips = vec![0usize; live.pairs.len()];
     for pass in 1..=s.max_iterations {
         out.iterations = pass;
@@ -278,7 +298,6 @@ pub fn active_set(
         // slip forces the pass's reactions call for (the fixed-point map)
         let mut mapped = slip_force.clone();
         let mut reversed: Vec<usize> = Vec::new();
-        let mut next_dir: Vec<Option<[f64; 2]>> = vec![None; live.pairs.len()];
         for (q, pair) in live.pairs.iter().enumerate() {
             let p = pair.point as usize;
             let f = pair.first as usize;
@@ -315,7 +334,7 @@ pub fn active_set(
                         flips[q] += 1;
                         st.state = PointState::Open;
                         changes += 1;
-                    } else if norm2(rt) > s.mu_static * reaction[2].max(0.0) + tol_f {
+                    } else if norm2(rt) > limit[q] * reaction[2].max(0.0) + tol_f {
                         let mag = norm2(rt);
                         st.slip_dir = [rt[0] / mag, rt[1] / mag];
                         st.state = PointState::Slip;
@@ -339,23 +358,16 @@ pub fn active_set(
                         st.state = PointState::Open;
                         changes += 1;
                     } else {
-                        if !frictionless && along > tol_g {
+                        if !frictionless && along > tol_g && flips[q] < MAX_FLIPS {
                             // Moving with the friction force: it sticks once
                             // the slip forces have settled.
                             reversed.push(q);
                         }
-                        // Within a step the friction force keeps the direction
-                        // it had when the point started slipping (or at the
-                        // end of the last step): with the direction taken from
-                        // each pass's slip the iteration cycles between
-                        // nearby angles on 3-D joints. The direction follows
-                        // the slip from one step to the next (see below).
+                        // The direction is the trial force's for the whole
+                        // step (taken from each pass's slip, the iteration
+                        // cycles between nearby angles on 3-D joints).
                         let fs = s.mu_kinetic * reaction[2].max(0.0);
                         mapped[q] = [fs * st.slip_dir[0], fs * st.slip_dir[1]];
-                        next_dir[q] = {
-                            let ms = norm2(slip);
-                            (ms > tol_g).then(|| [-slip[0] / ms, -slip[1] / ms])
-                        };
                     }
                 }
                 PointState::Grouted => {
@@ -381,11 +393,6 @@ pub fn active_set(
                 .map(|&q| norm2([mapped[q][0] - slip_force[q][0], mapped[q][1] - slip_force[q][1]]))
                 .fold(0.0, f64::max);
             if residual <= tol_f && reversed.is_empty() {
-                for &q in &slipping {
-                    if let Some(d) = next_dir[q] {
-                        work[live.pairs[q].point as usize].slip_dir = d;
-                    }
-                }
                 for (q, pair) in live.pairs.iter().enumerate() {
                     let st = &work[pair.point as usize];
                     if flips[q] >= MAX_FLIPS && st.state.is_closed() {
@@ -399,6 +406,7 @@ pub fn active_set(
             } else if residual <= tol_f {
                 for &q in &reversed {
                     work[live.pairs[q].point as usize].state = PointState::Stick;
+                    flips[q] += 1;
                 }
                 last_changes = reversed.len();
                 anderson.clear();
@@ -414,10 +422,6 @@ pub fn active_set(
                     slip_force[q] = [next[2 * i], next[2 * i + 1]];
                 }
             }
-        }
-        if std::env::var_os("GROUTREADY_DEBUG_CONTACT").is_some() {
-            let count = |st: PointState| live.pairs.iter().filter(|p| work[p.point as usize].state == st).count();
-            eprintln!("day {} pass {pass}: changes {changes} open {} stick {} slip {} grouted {}", sys.day, count(PointState::Open), count(PointState::Stick), count(PointState::Slip), count(PointState::Grouted));
         }
     }
     Err(JointStepError::NotConverged {
@@ -487,9 +491,23 @@ pub fn condensed_qp(
             live.solver.solve_columns(&mut g)?;
             out.solves += cols;
             let row = |i: usize| live.pairs[contact[i / 3]].first as usize + i % 3;
-            let w = nalgebra::DMatrix::from_fn(cols, cols, |i, j| {
+            let mut w = nalgebra::DMatrix::from_fn(cols, cols, |i, j| {
                 0.5 * (g[(row(i), j)] + g[(row(j), i)])
             });
+            // A relative component held by a support is not a contact
+            // unknown: decouple it with a compliance of the problem's scale
+            // (its identity row of the constrained matrix would otherwise read
+            // 1 m/N against ~1e-10) and pin its force to zero below.
+            let held: Vec<bool> = (0..cols).map(|i| live.supported[row(i)]).collect();
+            let free_diag: Vec<f64> = (0..cols).filter(|&i| !held[i]).map(|i| w[(i, i)]).collect();
+            let scale = free_diag.iter().sum::<f64>() / free_diag.len().max(1) as f64;
+            for i in (0..cols).filter(|&i| held[i]) {
+                for j in 0..cols {
+                    w[(i, j)] = 0.0;
+                    w[(j, i)] = 0.0;
+                }
+                w[(i, i)] = if scale > 0.0 { scale } else { 1.0 };
+            }
             let mut b = vec![0.0; cols];
             let mut r_old = vec![0.0; cols];
             for (j, &q) in contact.iter().enumerate() {
@@ -500,10 +518,16 @@ pub fn condensed_qp(
                 }
                 b[3 * j + 2] += start_gap(&old[p], &work[p]);
             }
+            for i in (0..cols).filter(|&i| held[i]) {
+                b[i] = 0.0;
+            }
             let fr = vec![friction; contact.len()];
             let problem = ContactProblem::new(&w, &b, &fr);
-            let sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))?;
+            let mut sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))?;
             out.iterations += sol.fixed_point_iterations;
+            for i in (0..cols).filter(|&i| held[i]) {
+                sol.r[i] = 0.0;
+            }
             for i in 0..n {
                 let mut acc = 0.0;
                 for k in 0..cols {

@@ -376,9 +376,14 @@ impl MechanicsModel {
         for (p, &on) in pair_live.iter().enumerate() {
             let st = &mut self.state.joints[p];
             if on && !st.paired {
+                // A block cast against its neighbour starts touching it: the
+                // first guess is closed (most new pairs are pressed by the
+                // fresh concrete's weight and expansion), open with a gap.
+                let closed = self.initial_gap == 0.0 && self.joint_settings.mu_static > 0.0;
                 *st = JointPointState {
                     paired: true,
                     gap: self.initial_gap,
+                    state: if closed { PointState::Stick } else { PointState::Open },
                     ..JointPointState::UNPAIRED
                 };
             }
