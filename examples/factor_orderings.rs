@@ -1,15 +1,23 @@
 //! Experiment: numeric factorisation cost of the complete demo mechanics matrix.
+use groutready::fem::{
+    elasticity, nested_dissection, CholeskySolver, Ordering, Pattern, SparseSym,
+};
 use std::sync::Arc;
 use std::time::Instant;
-use groutready::fem::{elasticity, nested_dissection, CholeskySolver, Ordering, Pattern, SparseSym};
 
 fn main() -> anyhow::Result<()> {
-    let path = std::env::args().nth(1).unwrap_or("models/tmp_demo_mech.toml".into());
+    let path = std::env::args()
+        .nth(1)
+        .unwrap_or("models/tmp_demo_mech.toml".into());
     let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
     let mesh = &inputs.mesh;
     scalar(mesh)?;
     let n = 3 * mesh.nodes.len();
-    let local: Vec<[u32; 24]> = mesh.elements.iter().map(|e| elasticity::element_dofs(e)).collect();
+    let local: Vec<[u32; 24]> = mesh
+        .elements
+        .iter()
+        .map(|e| elasticity::element_dofs(e))
+        .collect();
     let pattern = Arc::new(Pattern::new(n, &local));
     let mut a = SparseSym::new(pattern.clone());
     for (e, _) in mesh.elements.iter().enumerate() {
@@ -18,10 +26,24 @@ fn main() -> anyhow::Result<()> {
         a.add_element(e, &k);
     }
     let mut fixed = vec![false; n];
-    for i in 0..n { if mesh.nodes[i / 3][2] < mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min) + 1e-6 { fixed[i] = true; } }
+    for i in 0..n {
+        if mesh.nodes[i / 3][2] < mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min) + 1e-6 {
+            fixed[i] = true;
+        }
+    }
     a.apply_dirichlet(&fixed);
     let xyz: Vec<[f64; 3]> = (0..n).map(|d| mesh.nodes[d / 3]).collect();
-    for (name, ord) in [("amd", Ordering::Amd), ("nd64", Ordering::Custom(nested_dissection(&pattern, &xyz, 64))), ("nd256", Ordering::Custom(nested_dissection(&pattern, &xyz, 256)))] {
+    for (name, ord) in [
+        ("amd", Ordering::Amd),
+        (
+            "nd64",
+            Ordering::Custom(nested_dissection(&pattern, &xyz, 64)),
+        ),
+        (
+            "nd256",
+            Ordering::Custom(nested_dissection(&pattern, &xyz, 256)),
+        ),
+    ] {
         for (pname, par) in [("seq", faer::Par::Seq), ("rayon", faer::Par::rayon(0))] {
             let t = Instant::now();
             let mut s = CholeskySolver::with_options(pattern.clone(), &ord, par)?;
@@ -36,7 +58,10 @@ fn main() -> anyhow::Result<()> {
             let t = Instant::now();
             s.solve_in_place(&mut x)?;
             let t3 = t.elapsed().as_secs_f64();
-            println!("{name:6} {pname:5} n={n} nnzL={} symb {ts:.3} num {t1:.3}/{t2:.3} solve {t3:.4}", s.factor_nnz());
+            println!(
+                "{name:6} {pname:5} n={n} nnzL={} symb {ts:.3} num {t1:.3}/{t2:.3} solve {t3:.4}",
+                s.factor_nnz()
+            );
         }
     }
     Ok(())
@@ -53,13 +78,25 @@ fn scalar(mesh: &groutready::mesh::Mesh) -> anyhow::Result<()> {
         let k = nalgebra::DMatrix::<f64>::from_fn(8, 8, |i, j| if i == j { 8.0 } else { -1.0 });
         a.add_element(e, &k);
     }
-    for i in 0..n { a.add_diag(i, 1.0); }
+    for i in 0..n {
+        a.add_diag(i, 1.0);
+    }
     let xyz: Vec<[f64; 3]> = mesh.nodes.clone();
-    for (name, ord) in [("amd", Ordering::Amd), ("nd64", Ordering::Custom(nested_dissection(&pattern, &xyz, 64)))] {
+    for (name, ord) in [
+        ("amd", Ordering::Amd),
+        (
+            "nd64",
+            Ordering::Custom(nested_dissection(&pattern, &xyz, 64)),
+        ),
+    ] {
         let mut s = CholeskySolver::with_options(pattern.clone(), &ord, faer::Par::Seq)?;
         let t = Instant::now();
         s.factorize(&a)?;
-        println!("scalar {name} n={n} nnzL={} num {:.4}", s.factor_nnz(), t.elapsed().as_secs_f64());
+        println!(
+            "scalar {name} n={n} nnzL={} num {:.4}",
+            s.factor_nnz(),
+            t.elapsed().as_secs_f64()
+        );
     }
     Ok(())
 }

@@ -153,7 +153,14 @@ pub fn run(
             .iter()
             .map(|g| (g.planned - epoch).num_days())
             .collect();
-        extra.extend(inputs.scene.output.snapshots.iter().map(|d| (*d - epoch).num_days()));
+        extra.extend(
+            inputs
+                .scene
+                .output
+                .snapshots
+                .iter()
+                .map(|d| (*d - epoch).num_days()),
+        );
         output::apertures::write(&path, epoch, &sim.joint_records, &extra).map_err(io_err(&path))?
     };
     let pvd = fields.join("fields.pvd");

@@ -46,7 +46,8 @@ enum Command {
 enum StudyCommand {
     /// Thermal run time, steps and factorisations on the demo and the large arch.
     Perf {
-        /// Scenes to time (default: models/demo_arch.toml and models/xiaowan_like.toml).
+        /// Scenes to time (default: models/demo_arch.toml, then the first 120
+        /// days and the complete-dam steps of models/xiaowan_like.toml).
         scenes: Vec<PathBuf>,
         /// Time only the first (demo) scene.
         #[arg(long)]
@@ -150,12 +151,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     solver,
                 },
         } => {
-            let scenes = if scenes.is_empty() {
-                let mut v = vec![bundled("models/demo_arch.toml")];
-                if !quick {
-                    v.push(bundled("models/xiaowan_like.toml"));
-                }
-                v
+            let defaults = scenes.is_empty();
+            let scenes = if defaults {
+                vec![bundled("models/demo_arch.toml")]
             } else {
                 scenes
             };
@@ -169,7 +167,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     anyhow::bail!("--solver: expected cholesky, pcg or both, found {other:?}")
                 }
             };
-            groutready::study::perf(&scenes, days, &solvers)
+            groutready::study::perf(&scenes, days, &solvers)?;
+            if defaults && !quick {
+                // The large arch's whole construction with mechanics takes
+                // hours: its first 120 days and its complete-dam steps.
+                let large = [bundled("models/xiaowan_like.toml")];
+                groutready::study::perf(&large, Some(days.unwrap_or(120.0)), &solvers)?;
+            }
+            Ok(())
         }
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out },

@@ -80,7 +80,10 @@ fn run_writes_temperatures_apertures_and_snapshots() {
     let mut states = std::collections::BTreeSet::new();
     let mut widest: f64 = 0.0;
     for r in &rows {
-        assert!(["upstream", "center", "downstream", "min"].contains(&r[2]), "{r:?}");
+        assert!(
+            ["upstream", "center", "downstream", "min"].contains(&r[2]),
+            "{r:?}"
+        );
         let a: f64 = r[5].parse().unwrap();
         assert!((-1e-3..4.0).contains(&a), "implausible aperture {r:?}");
         widest = widest.max(a);
@@ -88,17 +91,35 @@ fn run_writes_temperatures_apertures_and_snapshots() {
     }
     assert!(widest > 0.5, "cooling opens the joints: widest {widest} mm");
     for s in &states {
-        assert!(["open", "stick", "slip", "grouted", "reopened"].contains(&s.as_str()), "{s}");
+        assert!(
+            ["open", "stick", "slip", "grouted", "reopened"].contains(&s.as_str()),
+            "{s}"
+        );
     }
-    assert!(states.contains("open") && states.contains("grouted"), "{states:?}");
+    assert!(
+        states.contains("open") && states.contains("grouted"),
+        "{states:?}"
+    );
 
-    only(&out, &["apertures.csv", "fields", "run.txt", "temperatures.csv"]);
+    only(
+        &out,
+        &["apertures.csv", "fields", "run.txt", "temperatures.csv"],
+    );
     let fields = out.join("fields");
     let pvd = std::fs::read_to_string(fields.join("fields.pvd")).unwrap();
     assert!(pvd.contains("fields_2024-07-01.vtu"), "{pvd}");
     let vtu = std::fs::read_to_string(fields.join("fields_2024-07-01.vtu")).unwrap();
-    for field in ["temperature_c", "ux_m", "sxx_mpa", "joint_aperture_mm", "joint_pressure_mpa"] {
-        assert!(vtu.contains(&format!("Name=\"{field}\"")), "{field} missing");
+    for field in [
+        "temperature_c",
+        "ux_m",
+        "sxx_mpa",
+        "joint_aperture_mm",
+        "joint_pressure_mpa",
+    ] {
+        assert!(
+            vtu.contains(&format!("Name=\"{field}\"")),
+            "{field} missing"
+        );
     }
     only(tmp.path(), &["run"]);
 }

@@ -93,8 +93,15 @@ fn grouted_joint_heated_carries_the_series_spring_stress() {
         let (lo, hi) = sigma_xx_range(&m);
         let err = (lo - expected).abs().max((hi - expected).abs()) / expected.abs();
         eprintln!("{contact:?}: grouted + heated 10 °C: σxx {expected:.6e} Pa (rigid joint {:.6e}), error {err:.2e}", -E * ALPHA * 10.0);
-        assert!(err < 1e-9, "{contact:?}: σxx in [{lo}, {hi}], expected {expected}");
-        assert!(m.state.joints.iter().all(|s| s.state == PointState::Grouted));
+        assert!(
+            err < 1e-9,
+            "{contact:?}: σxx in [{lo}, {hi}], expected {expected}"
+        );
+        assert!(m
+            .state
+            .joints
+            .iter()
+            .all(|s| s.state == PointState::Grouted));
         assert!(m.equilibrium_residual() < 1e-8);
     }
 }
@@ -109,7 +116,10 @@ fn grouted_joint_cooled_below_the_bond_strength_holds_in_tension() {
         let (lo, hi) = sigma_xx_range(&m);
         let err = (lo - expected).abs().max((hi - expected).abs()) / expected;
         eprintln!("{contact:?}: grouted + cooled 3 °C: σxx {expected:.6e} Pa < bond 1 MPa, error {err:.2e}");
-        assert!(err < 1e-9, "{contact:?}: σxx in [{lo}, {hi}], expected {expected}");
+        assert!(
+            err < 1e-9,
+            "{contact:?}: σxx in [{lo}, {hi}], expected {expected}"
+        );
         for st in &m.state.joints {
             assert_eq!(st.label(), "grouted");
         }
@@ -136,7 +146,10 @@ fn grouted_joint_cooled_beyond_the_bond_strength_cracks_and_reopens() {
         eprintln!("{contact:?}: grouted + cooled 10 °C: cracked, aperture {:.6} mm, largest |σxx| {worst:.2e} Pa", 1e3 * m.state.joints[0].aperture());
         // Nothing is loaded after cracking, so the stresses themselves are the
         // equilibrium check (a relative residual would divide round-off by round-off).
-        assert!(worst < 1e-6 * E * ALPHA * 10.0, "{contact:?}: stress {worst} after cracking");
+        assert!(
+            worst < 1e-6 * E * ALPHA * 10.0,
+            "{contact:?}: stress {worst} after cracking"
+        );
     }
 }
 
@@ -178,7 +191,10 @@ fn seasons(scale_len: f64, scale_stress: f64) -> (Vec<f64>, usize, Vec<usize>) {
         let open = g0 - ALPHA * dt * L;
         for st in &m.state.joints {
             let g = st.aperture() / scale_len;
-            assert!((g - open.max(0.0)).abs() < 1e-9 * g0, "step {k}: gap {g} vs {open}");
+            assert!(
+                (g - open.max(0.0)).abs() < 1e-9 * g0,
+                "step {k}: gap {g} vs {open}"
+            );
         }
         let sigma = -E * (ALPHA * dt * L - g0).max(0.0) / L;
         let (lo, hi) = sigma_xx_range(&m);

@@ -390,7 +390,12 @@ pub fn active_set(
         } else {
             let residual = slipping
                 .iter()
-                .map(|&q| norm2([mapped[q][0] - slip_force[q][0], mapped[q][1] - slip_force[q][1]]))
+                .map(|&q| {
+                    norm2([
+                        mapped[q][0] - slip_force[q][0],
+                        mapped[q][1] - slip_force[q][1],
+                    ])
+                })
                 .fold(0.0, f64::max);
             if residual <= tol_f && reversed.is_empty() {
                 for (q, pair) in live.pairs.iter().enumerate() {
@@ -602,7 +607,13 @@ impl Anderson {
             self.fs.remove(0);
         }
         let k = self.xs.len();
-        let r = |i: usize| -> Vec<f64> { self.fs[i].iter().zip(&self.xs[i]).map(|(f, x)| f - x).collect() };
+        let r = |i: usize| -> Vec<f64> {
+            self.fs[i]
+                .iter()
+                .zip(&self.xs[i])
+                .map(|(f, x)| f - x)
+                .collect()
+        };
         let rk = r(k - 1);
         if k == 1 {
             return fx.to_vec();
@@ -618,7 +629,10 @@ impl Anderson {
         }
         let rhs = nalgebra::DVector::from_column_slice(&rk);
         let scale = dr.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let Ok(gamma) = dr.clone().svd(true, true).solve(&rhs, 1e-12 * scale.max(f64::MIN_POSITIVE))
+        let Ok(gamma) = dr
+            .clone()
+            .svd(true, true)
+            .solve(&rhs, 1e-12 * scale.max(f64::MIN_POSITIVE))
         else {
             self.clear();
             return fx.to_vec();

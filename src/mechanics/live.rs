@@ -112,14 +112,15 @@ impl LiveSystem {
         let mut index_of = vec![NONE; 3 * n_nodes];
         let mut node_dofs = Vec::new();
         let mut n = 0u32;
-        let number = |g: usize, n: &mut u32, index_of: &mut Vec<u32>, node_dofs: &mut Vec<(u32, u32)>| {
-            if index_of[g] == NONE {
-                index_of[g] = *n;
-                node_dofs.push((g as u32, *n));
-                *n += 1;
-            }
-            index_of[g]
-        };
+        let number =
+            |g: usize, n: &mut u32, index_of: &mut Vec<u32>, node_dofs: &mut Vec<(u32, u32)>| {
+                if index_of[g] == NONE {
+                    index_of[g] = *n;
+                    node_dofs.push((g as u32, *n));
+                    *n += 1;
+                }
+                index_of[g]
+            };
         let mut live_elements = Vec::new();
         for (e, conn) in elements.iter().enumerate() {
             if !live[e] {
@@ -131,7 +132,12 @@ impl LiveSystem {
                 let slot = pair_of_b[node as usize];
                 if slot == NONE {
                     for c in 0..3 {
-                        dofs.push(number(3 * node as usize + c, &mut n, &mut index_of, &mut node_dofs));
+                        dofs.push(number(
+                            3 * node as usize + c,
+                            &mut n,
+                            &mut index_of,
+                            &mut node_dofs,
+                        ));
                     }
                 } else {
                     let a = points[pairs[slot as usize].point as usize].a as usize;
@@ -270,7 +276,6 @@ impl LiveSystem {
             }
         }
     }
-
 }
 
 /// T of one element: 24 rows (global node dofs), one column per element

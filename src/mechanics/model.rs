@@ -238,15 +238,15 @@ impl MechanicsModel {
         let j = &scene.joints;
         // Gaps are compared to 1e-10 of the model's size, forces to 1e-9 of
         // the step's largest force: the same decisions in m/N and mm/MPa units.
-        let (lo, hi) = mesh.nodes.iter().fold(
-            ([f64::MAX; 3], [f64::MIN; 3]),
-            |(lo, hi), p| {
+        let (lo, hi) = mesh
+            .nodes
+            .iter()
+            .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
                 (
                     std::array::from_fn(|k| lo[k].min(p[k])),
                     std::array::from_fn(|k| hi[k].max(p[k])),
                 )
-            },
-        );
+            });
         let size = (0..3)
             .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
             .sum::<f64>()
@@ -303,7 +303,9 @@ impl MechanicsModel {
             zone_points: points.iter().enumerate().fold(
                 std::collections::HashMap::new(),
                 |mut m, (i, p)| {
-                    m.entry((p.joint, p.zone)).or_insert_with(Vec::new).push(i as u32);
+                    m.entry((p.joint, p.zone))
+                        .or_insert_with(Vec::new)
+                        .push(i as u32);
                     m
                 },
             ),
@@ -383,7 +385,11 @@ impl MechanicsModel {
                 *st = JointPointState {
                     paired: true,
                     gap: self.initial_gap,
-                    state: if closed { PointState::Stick } else { PointState::Open },
+                    state: if closed {
+                        PointState::Stick
+                    } else {
+                        PointState::Open
+                    },
                     ..JointPointState::UNPAIRED
                 };
             }
@@ -628,7 +634,8 @@ impl MechanicsModel {
             self.stats.numeric += out.factorizations;
             self.stats.seconds_numeric += out.seconds_numeric;
             self.stats.contact_iterations += out.iterations;
-            self.stats.kept_closed_tension = self.stats.kept_closed_tension.max(out.kept_closed_tension);
+            self.stats.kept_closed_tension =
+                self.stats.kept_closed_tension.max(out.kept_closed_tension);
             self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
             out.x
         };

@@ -2,9 +2,9 @@
 //! next to its destination and renamed into place only when complete, so an
 //! interrupted or failed run never leaves half a result behind.
 
+pub mod apertures;
 pub mod run_dir;
 pub mod snapshot;
-pub mod apertures;
 pub mod temperatures;
 
 pub use run_dir::RunDir;

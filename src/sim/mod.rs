@@ -403,15 +403,16 @@ impl<'a> Simulation<'a> {
             let sample = match kind {
                 JointColumnKind::Point { index, .. } => {
                     let zp = &self.mesh.zone_points[index as usize];
-                    m.point_aperture(self.mesh, zp).map(|(aperture, state)| JointSample {
-                        aperture,
-                        state,
-                        temperature: self
-                            .thermal
-                            .as_ref()
-                            .and_then(|th| th.point_temperature(self.mesh, zp))
-                            .unwrap_or(f64::NAN),
-                    })
+                    m.point_aperture(self.mesh, zp)
+                        .map(|(aperture, state)| JointSample {
+                            aperture,
+                            state,
+                            temperature: self
+                                .thermal
+                                .as_ref()
+                                .and_then(|th| th.point_temperature(self.mesh, zp))
+                                .unwrap_or(f64::NAN),
+                        })
                 }
                 JointColumnKind::Min => {
                     m.zone_min_aperture(joint, zone)
