@@ -19,15 +19,27 @@
 //!   strength cracks it and it becomes a contact point again.
 //!
 //! Two solvers share this contract ([`ContactSolverKind`]):
-//! - [`active_set`]: the states are guessed (warm start: the last step's),
-//!   closed points become exact Dirichlet rows of their own unknowns, the
-//!   system is solved, and the states are corrected from the gaps, reactions
-//!   and slip directions until nothing changes. The symbolic factorisation is
-//!   shared by every state; a numeric one is needed only when the set of
-//!   constrained rows changes; slip-force corrections are re-solves.
+//! - [`active_set`]: the states are guessed (warm start: the last step's;
+//!   a new pair starts closed), closed points become exact Dirichlet rows of
+//!   their own unknowns, the system is solved, and the states are corrected
+//!   from the gaps and reactions until nothing changes. The symbolic
+//!   factorisation is shared by every state; a numeric one is needed only
+//!   when the set of constrained rows changes. Friction is a return mapping:
+//!   a point that slipped in the last step starts as a stick trial, slips if
+//!   its trial force exceeds μ_k·r_n (μ_s for a point at rest), in the trial
+//!   force's direction for the whole step; the slip forces μ_k·r_n(x) are a
+//!   fixed point solved by Anderson mixing (re-solves, no refactorisation).
+//!   A point may switch open ↔ closed or slip → stick [`MAX_FLIPS`] times
+//!   per step, then only close or slip, so the iteration ends.
 //! - [`condensed_qp`]: the Delassus operator W = Eᵀ K̃⁻¹ E of the contact
 //!   pairs from multi-column solves, handed to the clarabel cone program of
-//!   [`crate::joint::solve`]. Dense in the pairs: for checks and small scenes.
+//!   [`crate::joint::solve`] (maximum dissipation; relative components held
+//!   by supports are left out). Dense in the pairs: for checks and small
+//!   scenes.
+//!
+//! Verified by `tests/joint_two_blocks.rs`, `tests/joint_grouting.rs`,
+//! `tests/joint_friction.rs` (closed forms, both solvers) and
+//! `tests/contact_solvers_agree.rs` (the two solvers on a staged dam).
 
 use std::time::Instant;
 
