@@ -58,6 +58,10 @@ enum StudyCommand {
         /// Thermal solver(s) to time: cholesky, pcg or both (default: each scene's own).
         #[arg(long)]
         solver: Option<String>,
+        /// Also time the complete-dam mechanical step of scenes above 100k
+        /// mechanical dofs (minutes and several GB on the large arch).
+        #[arg(long)]
+        complete_mechanics: bool,
     },
 }
 
@@ -149,6 +153,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     quick,
                     days,
                     solver,
+                    complete_mechanics,
                 },
         } => {
             let defaults = scenes.is_empty();
@@ -167,12 +172,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     anyhow::bail!("--solver: expected cholesky, pcg or both, found {other:?}")
                 }
             };
-            groutready::study::perf(&scenes, days, &solvers)?;
+            groutready::study::perf(&scenes, days, &solvers, complete_mechanics)?;
             if defaults && !quick {
                 // The large arch's whole construction with mechanics takes
                 // hours: its first 120 days and its complete-dam steps.
                 let large = [bundled("models/xiaowan_like.toml")];
-                groutready::study::perf(&large, Some(days.unwrap_or(120.0)), &solvers)?;
+                groutready::study::perf(
+                    &large,
+                    Some(days.unwrap_or(120.0)),
+                    &solvers,
+                    complete_mechanics,
+                )?;
             }
             Ok(())
         }
