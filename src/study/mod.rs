@@ -122,7 +122,10 @@ pub fn perf(
                 );
             }
             let mech_dofs = 3 * mesh.nodes.len();
-            if scene.any_mechanical() && !complete_mechanics && mech_dofs > COMPLETE_MECHANICS_MAX_DOFS {
+            if scene.any_mechanical()
+                && !complete_mechanics
+                && mech_dofs > COMPLETE_MECHANICS_MAX_DOFS
+            {
                 println!(
                     "{:<22} complete dam mechanics: skipped ({mech_dofs} dofs; --complete-mechanics times it: minutes, several GB)",
                     ""
