@@ -192,19 +192,8 @@ pub fn full_dam_step_cost(
     mesh: &crate::mesh::Mesh,
     steps: usize,
 ) -> anyhow::Result<FullDamCost> {
-    use crate::mesh::Part;
     let mut th = crate::thermal::ThermalModel::new(mesh, scene, Vec::new(), None, None)?;
-    let mut lifts: Vec<(u32, u32)> = mesh
-        .parts
-        .iter()
-        .filter_map(|p| match p {
-            Part::Concrete { block, lift } => Some((*block, *lift)),
-            Part::Rock => None,
-        })
-        .collect();
-    lifts.sort_unstable();
-    lifts.dedup();
-    for (block, lift) in lifts {
+    for (block, lift) in all_lifts(mesh) {
         th.pour(block, lift, 0.0, 15.0);
     }
     th.step(0.0, 1.0)?;
@@ -222,6 +211,22 @@ pub fn full_dam_step_cost(
         solve_s_per_step: (th.stats.seconds_solve - first.seconds_solve) / n,
         step_s: t.elapsed().as_secs_f64() / n,
     })
+}
+
+/// Every (block, lift) of the mesh, sorted.
+fn all_lifts(mesh: &crate::mesh::Mesh) -> Vec<(u32, u32)> {
+    use crate::mesh::Part;
+    let mut lifts: Vec<(u32, u32)> = mesh
+        .parts
+        .iter()
+        .filter_map(|p| match p {
+            Part::Concrete { block, lift } => Some((*block, *lift)),
+            Part::Rock => None,
+        })
+        .collect();
+    lifts.sort_unstable();
+    lifts.dedup();
+    lifts
 }
 
 /// Cost of one mechanical step of the complete dam.
@@ -242,23 +247,12 @@ pub fn full_dam_mechanics_step_cost(
     scene: &Scene,
     mesh: &crate::mesh::Mesh,
 ) -> anyhow::Result<FullDamMechCost> {
-    use crate::mesh::Part;
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
         scene,
         &crate::mechanics::Supports::far_boundary(mesh),
     )?;
-    let mut lifts: Vec<(u32, u32)> = mesh
-        .parts
-        .iter()
-        .filter_map(|p| match p {
-            Part::Concrete { block, lift } => Some((*block, *lift)),
-            Part::Rock => None,
-        })
-        .collect();
-    lifts.sort_unstable();
-    lifts.dedup();
-    for (block, lift) in lifts {
+    for (block, lift) in all_lifts(mesh) {
         m.pour(block, lift, 0.0);
     }
     let t = Instant::now();
