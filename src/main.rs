@@ -30,6 +30,33 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Readiness of every grouting zone on its planned date, remedies for the
+    /// zones that are not groutable, and a report (the weekly job).
+    Plan {
+        /// Scene file (default: the bundled demo arch dam, models/demo_arch.toml).
+        scene: Option<PathBuf>,
+        /// Schedules folder (default: the scene's `schedules`).
+        #[arg(long)]
+        schedules: Option<PathBuf>,
+        /// Run folder to write (default: runs/<scene name>); its checkpoints
+        /// are reused when the scene is unchanged.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Zones planned before this date (YYYY-MM-DD) are history (default:
+        /// the day after the last zone marked done in grouting.csv, else today).
+        #[arg(long, value_parser = parse_date)]
+        as_of: Option<chrono::NaiveDate>,
+        /// Plan only the zones due within this many days of the as-of date
+        /// (default: the scene's planner.horizon_days, else all).
+        #[arg(long)]
+        horizon_days: Option<u32>,
+        /// Simulate from day 0 even if the run folder has checkpoints.
+        #[arg(long)]
+        from_scratch: bool,
+        /// Exit with code 3 when any zone still to grout is not groutable.
+        #[arg(long)]
+        fail_on_flag: bool,
+    },
     /// Benchmarks: what accuracy costs in time.
     Study {
         #[command(subcommand)]
@@ -92,6 +119,14 @@ fn default_out(scene: &Path) -> PathBuf {
     PathBuf::from("runs").join(stem)
 }
 
+fn parse_date(s: &str) -> Result<chrono::NaiveDate, String> {
+    chrono::NaiveDate::parse_from_str(s, "%Y-%m-%d")
+        .map_err(|_| format!("expected a date YYYY-MM-DD, found {s:?}"))
+}
+
+/// Exit code of a plan with `--fail-on-flag` and a zone not groutable.
+const EXIT_FLAGGED: u8 = 3;
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
@@ -102,7 +137,7 @@ fn main() -> ExitCode {
         }
     };
     match dispatch(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(e) => {
             // Messages that already quote their cause are not repeated.
             let mut msg = e.to_string();
@@ -118,7 +153,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn dispatch(cli: Cli) -> anyhow::Result<()> {
+fn dispatch(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Run {
             scene,
@@ -144,7 +179,72 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             bar.finish_and_clear();
             print!("{}", groutready::study::summary_line(&summary));
             println!("wrote {}", summary.out.display());
-            Ok(())
+            Ok(0)
+        }
+        Command::Plan {
+            scene,
+            schedules,
+            out,
+            as_of,
+            horizon_days,
+            from_scratch,
+            fail_on_flag,
+        } => {
+            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+            let out = out.unwrap_or_else(|| default_out(&scene));
+            let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+            eprintln!(
+                "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
+                inputs.scene.name,
+                inputs.mesh.elements.len(),
+                inputs.schedules.pours.len(),
+                inputs.schedules.grouting.len(),
+                inputs.scene.effects
+            );
+            let request = app::plan::PlanRequest {
+                as_of,
+                horizon_days,
+                from_scratch,
+            };
+            let bar = groutready::progress::bar("simulating");
+            let summary = app::plan::plan(&inputs, &out, &request, &mut |p| match p {
+                groutready::planner::Progress::Baseline { day, end } => {
+                    groutready::progress::update(&bar, day, end)
+                }
+                groutready::planner::Progress::Resimulation(what) => {
+                    bar.set_message(format!("re-simulating: {what}"))
+                }
+            })
+            .with_context(|| format!("planning {}", scene.display()))?;
+            bar.finish_and_clear();
+            print!("{}", groutready::report::readiness_table(&summary.plan));
+            for (j, z, why) in &summary.newly_flagged {
+                println!("note: joint {j} zone {z} is no longer groutable once the remedies are applied: {why}");
+            }
+            let st = &summary.plan.stats;
+            println!(
+                "simulated in {:.1} s{} + {} re-simulations in {:.1} s; {} checkpoints kept",
+                st.baseline_seconds,
+                st.restarted_from
+                    .map(|d| format!(" (restarted from {d})"))
+                    .unwrap_or_default(),
+                st.resimulations,
+                st.resimulation_seconds,
+                summary.checkpoints_kept
+            );
+            if summary.remedied {
+                println!(
+                    "remedied schedules: {}",
+                    summary.out.join(app::plan::REMEDIED_DIR).display()
+                );
+            }
+            println!("wrote {}", summary.out.display());
+            let flagged = summary.plan.flagged().count();
+            Ok(if fail_on_flag && flagged > 0 {
+                EXIT_FLAGGED
+            } else {
+                0
+            })
         }
         Command::Study {
             what:
@@ -185,14 +285,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     complete_mechanics,
                 )?;
             }
-            Ok(())
+            Ok(0)
         }
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out },
         } => {
             let n = groutready::study::synth_schedules(&scene, &out)?;
             println!("wrote {n} rows to {}", out.display());
-            Ok(())
+            Ok(0)
         }
     }
 }

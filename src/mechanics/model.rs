@@ -347,6 +347,16 @@ impl MechanicsModel {
         Ok(model)
     }
 
+    /// Restores a checkpointed state ([`MechanicsModel::state`] of a run of
+    /// the same scene); the live system is renumbered and refactorised on the
+    /// next step, as after a pour.
+    pub fn restore(&mut self, state: &MechState) {
+        self.state = state.clone();
+        self.prescribed.clear();
+        self.sys = None;
+        self.dirty = true;
+    }
+
     /// Pours lift `lift` of `block` on `day`: its elements are born stress-free.
     pub fn pour(&mut self, block: u32, lift: u32, day: f64) {
         if let Some(elems) = self.lift_elems.get(&(block, lift)) {

@@ -118,6 +118,9 @@ pub struct Scene {
     pub output: OutputSettings,
     #[serde(default)]
     pub solver: SolverSettings,
+    /// Readiness rules and remedy search (all keys optional).
+    #[serde(default)]
+    pub planner: crate::planner::PlannerSettings,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

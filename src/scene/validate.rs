@@ -168,6 +168,9 @@ pub(super) fn validate(s: &Scene) -> Check {
     if let Err((key, message)) = s.solver.validate() {
         return Err(SceneError::invalid(&key, message));
     }
+    if let Err((key, message)) = s.planner.validate() {
+        return Err(SceneError::invalid(&key, message));
+    }
 
     // Output.
     for d in &s.output.snapshots {

@@ -405,7 +405,7 @@ pub fn validate(s: &Schedules) -> Result<(), ScheduleError> {
     }
     check_cooling(&s.cooling, &s.pours)?;
     for g in &s.grouting {
-        let f = write::grouting_fields(g);
+        let f = write::grouting_fields(g, false);
         grouting_values(g, &|i| f[i].clone())?;
     }
     check_grouting(&s.grouting)?;

@@ -17,7 +17,7 @@ pub struct DamLayout {
 }
 
 /// One grouting zone of one joint: the lifts of the two blocks it spans.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct ZoneExtent {
     pub joint: u32,
     pub zone: u32,

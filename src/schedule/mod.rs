@@ -49,8 +49,11 @@
 //!   it (an implicit end, not an overlap). Two stages of the same lift may not
 //!   start on the same day.
 //!
-//! `grouting.csv` (optional for now): `joint,zone,planned_date`
-//! - one row per (joint, zone), no duplicates. [`check_against`] checks that
+//! `grouting.csv` (optional for now): `joint,zone,planned_date[,status]`
+//! - one row per (joint, zone), no duplicates;
+//! - the optional `status` column is `done` for a zone already grouted (the
+//!   planner's default as-of date is the day after the last of these),
+//!   `planned` or blank otherwise. [`check_against`] checks that
 //!   the joint and zone exist and that every lift of both blocks spanning the
 //!   zone is poured before the planned date.
 //!
@@ -103,6 +106,8 @@ pub const COOLING_HEADER: [&str; 8] = [
     "target_temp_c",
 ];
 pub const GROUTING_HEADER: [&str; 3] = ["joint", "zone", "planned_date"];
+/// `grouting.csv` with the optional `status` column.
+pub const GROUTING_HEADER_STATUS: [&str; 4] = ["joint", "zone", "planned_date", "status"];
 pub const WEATHER_HEADER: [&str; 2] = ["date", "air_temp_c"];
 pub const RESERVOIR_HEADER: [&str; 2] = ["date", "level_m"];
 pub const JOINT_METERS_HEADER: [&str; 5] = ["joint", "zone", "point", "date", "aperture_mm"];
@@ -193,6 +198,8 @@ pub struct GroutingPlan {
     pub joint: u32,
     pub zone: u32,
     pub planned: NaiveDate,
+    /// `status` = `done`: grouted (its date is history for the planner).
+    pub done: bool,
     /// 1-based line in `grouting.csv`.
     pub line: usize,
 }

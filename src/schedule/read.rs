@@ -9,8 +9,9 @@ use super::check;
 use super::error::ScheduleError;
 use super::{
     CoolingStage, GroutingPlan, JointMeter, MeterPoint, Pour, Schedules, Stage, COOLING_CSV,
-    COOLING_HEADER, GROUTING_CSV, GROUTING_HEADER, JOINT_METERS_CSV, JOINT_METERS_HEADER,
-    POURS_CSV, POURS_HEADER, RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV, WEATHER_HEADER,
+    COOLING_HEADER, GROUTING_CSV, GROUTING_HEADER, GROUTING_HEADER_STATUS, JOINT_METERS_CSV,
+    JOINT_METERS_HEADER, POURS_CSV, POURS_HEADER, RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV,
+    WEATHER_HEADER,
 };
 
 /// The data rows of one file, fields trimmed, blank lines dropped.
@@ -31,6 +32,17 @@ pub(crate) fn read_table(
     dir: &Path,
     file: &'static str,
     header: &'static [&'static str],
+    required: bool,
+) -> Result<Option<Table>, ScheduleError> {
+    read_table_alt(dir, file, &[header], required)
+}
+
+/// [`read_table`] for a file whose header may be any of `headers` (the
+/// first is the one error messages name).
+pub(crate) fn read_table_alt(
+    dir: &Path,
+    file: &'static str,
+    headers: &[&'static [&'static str]],
     required: bool,
 ) -> Result<Option<Table>, ScheduleError> {
     let path = dir.join(file);
@@ -67,15 +79,25 @@ pub(crate) fn read_table(
             ));
         }
     };
-    parse_table(text, file, header).map(Some)
+    parse_table_alt(text, file, headers).map(Some)
 }
 
-/// Parses CSV text (exposed for tests and in-memory edits).
+/// Parses CSV text (for tests).
+#[cfg(test)]
 pub(crate) fn parse_table(
     text: &str,
     file: &'static str,
     header: &'static [&'static str],
 ) -> Result<Table, ScheduleError> {
+    parse_table_alt(text, file, &[header])
+}
+
+fn parse_table_alt(
+    text: &str,
+    file: &'static str,
+    headers: &[&'static [&'static str]],
+) -> Result<Table, ScheduleError> {
+    let mut header = headers[0];
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -111,6 +133,9 @@ pub(crate) fn parse_table(
             continue; // blank (or whitespace-only) line
         }
         if !header_seen {
+            if let Some(h) = headers.iter().find(|h| h.len() == fields.len()) {
+                header = h;
+            }
             check_header(file, header, line, &fields)?;
             header_seen = true;
             continue;
@@ -372,6 +397,14 @@ fn grouting(t: &Table) -> Result<Vec<GroutingPlan>, ScheduleError> {
             joint: c.id(0)?,
             zone: c.id(1)?,
             planned: c.date(2)?,
+            done: match t.header.len() {
+                4 => match c.text(3).to_ascii_lowercase().as_str() {
+                    "done" => true,
+                    "planned" | "" => false,
+                    _ => return Err(c.err(3, "expected done, planned or blank")),
+                },
+                _ => false,
+            },
             line: c.line(),
         });
     }
@@ -429,7 +462,12 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Schedules, ScheduleError> {
     };
     check::check_cooling(&cooling, &pours)?;
 
-    let grouting = match read_table(dir, GROUTING_CSV, &GROUTING_HEADER, false)? {
+    let grouting = match read_table_alt(
+        dir,
+        GROUTING_CSV,
+        &[&GROUTING_HEADER, &GROUTING_HEADER_STATUS],
+        false,
+    )? {
         Some(t) => grouting(&t)?,
         None => Vec::new(),
     };

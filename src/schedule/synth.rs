@@ -211,6 +211,7 @@ pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
                 joint,
                 zone: z.zone,
                 planned: date,
+                done: false,
                 line: 0,
             });
         }

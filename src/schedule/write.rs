@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use super::{
     CoolingStage, GroutingPlan, JointMeter, Pour, Schedules, COOLING_CSV, COOLING_HEADER,
-    GROUTING_CSV, GROUTING_HEADER, JOINT_METERS_CSV, JOINT_METERS_HEADER, POURS_CSV, POURS_HEADER,
-    RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV, WEATHER_HEADER,
+    GROUTING_CSV, GROUTING_HEADER, GROUTING_HEADER_STATUS, JOINT_METERS_CSV, JOINT_METERS_HEADER,
+    POURS_CSV, POURS_HEADER, RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV, WEATHER_HEADER,
 };
 
 /// Shortest text that parses back to the same `f64` (no exponent).
@@ -37,12 +37,16 @@ pub(crate) fn cooling_fields(c: &CoolingStage) -> Vec<String> {
     ]
 }
 
-pub(crate) fn grouting_fields(g: &GroutingPlan) -> Vec<String> {
-    vec![
+pub(crate) fn grouting_fields(g: &GroutingPlan, with_status: bool) -> Vec<String> {
+    let mut f = vec![
         g.joint.to_string(),
         g.zone.to_string(),
         g.planned.to_string(),
-    ]
+    ];
+    if with_status {
+        f.push(if g.done { "done" } else { "planned" }.to_string());
+    }
+    f
 }
 
 pub(crate) fn meter_fields(m: &JointMeter) -> Vec<String> {
@@ -105,7 +109,18 @@ pub fn write_dir(s: &Schedules, dir: &Path) -> io::Result<()> {
         ),
         (
             GROUTING_CSV,
-            csv_text(&GROUTING_HEADER, s.grouting.iter().map(grouting_fields))?,
+            // The status column is written only when some zone is done.
+            if s.grouting.iter().any(|g| g.done) {
+                csv_text(
+                    &GROUTING_HEADER_STATUS,
+                    s.grouting.iter().map(|g| grouting_fields(g, true)),
+                )?
+            } else {
+                csv_text(
+                    &GROUTING_HEADER,
+                    s.grouting.iter().map(|g| grouting_fields(g, false)),
+                )?
+            },
         ),
     ];
     let series = |rows: &Vec<(chrono::NaiveDate, f64)>| {

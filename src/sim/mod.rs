@@ -2,6 +2,7 @@
 //! and stop on theirs, and the enabled physics advance step by step between
 //! events ([`timeline`]). Results are recorded at whole-day step ends.
 
+pub mod checkpoint;
 pub mod timeline;
 
 use std::path::Path;
@@ -11,10 +12,12 @@ use chrono::NaiveDate;
 use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::{Mesh, PointKind};
 use crate::scene::{Effect, Scene};
-use crate::schedule::Schedules;
+use crate::schedule::{DamLayout, Schedules, ZoneExtent};
 use crate::thermal::boundary::{day_of, AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
+
+pub use checkpoint::{Checkpoint, History};
 
 use timeline::{snap, DayEvents, Ladder, Timeline};
 
@@ -40,7 +43,7 @@ pub enum SimError {
 }
 
 /// Temperature history at the grouting-zone points, one row per whole day.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ZoneRecords {
     /// (joint, zone, point) per column
     pub points: Vec<(u32, u32, PointKind)>,
@@ -49,7 +52,7 @@ pub struct ZoneRecords {
 }
 
 /// Where a joint column samples its zone.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum JointColumnKind {
     /// a zone point (index into `Mesh::zone_points`)
     Point { kind: PointKind, index: u32 },
@@ -67,7 +70,8 @@ impl JointColumnKind {
 }
 
 /// One joint sample: aperture [m], state label, temperature [°C] (NaN without a thermal model).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(into = "checkpoint::SampleRecord")]
 pub struct JointSample {
     pub aperture: f64,
     pub state: &'static str,
@@ -76,11 +80,21 @@ pub struct JointSample {
 
 /// Aperture history at the grouting-zone points and zone minima, one row
 /// per whole day; None where the zone's blocks do not both exist yet.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointRecords {
     /// (joint, zone, kind) per column
     pub columns: Vec<(u32, u32, JointColumnKind)>,
     pub rows: Vec<(f64, Vec<Option<JointSample>>)>,
+}
+
+/// Mean temperature of each grouting zone's concrete, per block side, one
+/// row per whole day; NaN where a side's lifts are not all poured.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ZoneTemps {
+    /// the zones, in [`Mesh::zones`] order
+    pub zones: Vec<ZoneExtent>,
+    /// (day, [block A, block B] per zone)
+    pub rows: Vec<(f64, Vec<[f64; 2]>)>,
 }
 
 /// Counters of one run: which systems were assembled and solved.
@@ -106,7 +120,14 @@ pub struct Simulation<'a> {
     ladder: Ladder,
     pub records: ZoneRecords,
     pub joint_records: JointRecords,
+    pub zone_temps: ZoneTemps,
     pub snapshots: Vec<(f64, String)>,
+    /// Keep a [`Checkpoint`] at the first whole day at least this many days
+    /// after the last one (None: no checkpoints).
+    pub checkpoint_every: Option<f64>,
+    pub checkpoints: Vec<Checkpoint>,
+    /// the current day's events are still to apply (a fresh or restored run)
+    events_pending: bool,
     pours_done: usize,
     steps: usize,
     /// start of the pending mechanical step and the temperatures then
@@ -244,7 +265,14 @@ impl<'a> Simulation<'a> {
             day: 0.0,
             records,
             joint_records,
+            zone_temps: ZoneTemps {
+                zones: dam_layout(mesh).zones,
+                rows: Vec::new(),
+            },
             snapshots: Vec::new(),
+            checkpoint_every: None,
+            checkpoints: Vec::new(),
+            events_pending: true,
             pours_done: 0,
             steps: 0,
             mech_t0: 0.0,
@@ -255,6 +283,22 @@ impl<'a> Simulation<'a> {
 
     pub fn end_day(&self) -> f64 {
         self.timeline.end_day as f64
+    }
+
+    /// Makes each of `days` a step end, so the histories hold a row for it
+    /// (the delay search reads daily rows, joint meters their dates).
+    pub fn observe_days(&mut self, days: &[i64]) {
+        for &d in days {
+            if (0..=self.timeline.end_day).contains(&d) {
+                self.timeline.days.entry(d).or_default();
+            }
+        }
+    }
+
+    /// Stops the run at the start of `day` (its events applied and recorded)
+    /// instead of the scene's end; never later than that end.
+    pub fn set_end_day(&mut self, day: i64) {
+        self.timeline.end_day = self.timeline.end_day.min(day);
     }
 
     /// Applies the events of the current day (pours, stage changes).
@@ -307,9 +351,12 @@ impl<'a> Simulation<'a> {
     ) -> Result<RunStats, SimError> {
         let start = std::time::Instant::now();
         let end = self.end_day();
-        self.apply_events(snapshot_dir)?;
-        self.begin_mechanical_step();
-        self.record();
+        if self.events_pending {
+            self.apply_events(snapshot_dir)?;
+            self.begin_mechanical_step();
+            self.record();
+            self.events_pending = false;
+        }
         while self.day < end {
             let next = self.timeline.next_event_after(self.day);
             let dt = self.ladder.next_step(self.day, next);
@@ -327,6 +374,9 @@ impl<'a> Simulation<'a> {
                 self.mechanical_step()?;
             }
             self.ladder.grow(&self.scene.time);
+            if self.day.fract() == 0.0 {
+                self.maybe_checkpoint();
+            }
             self.apply_events(snapshot_dir)?;
             if self.day.fract() == 0.0 {
                 self.begin_mechanical_step();
@@ -378,6 +428,18 @@ impl<'a> Simulation<'a> {
 
     fn record(&mut self) {
         self.record_joints();
+        if let Some(th) = &self.thermal {
+            let side = |(block, from, to): (u32, u32, u32)| {
+                th.lifts_mean(block, from, to).unwrap_or(f64::NAN)
+            };
+            let row = self
+                .zone_temps
+                .zones
+                .iter()
+                .map(|z| [side(z.lifts_a), side(z.lifts_b)])
+                .collect();
+            self.zone_temps.rows.push((self.day, row));
+        }
         let Some(th) = &self.thermal else { return };
         let values = self
             .mesh
@@ -438,5 +500,37 @@ impl<'a> Simulation<'a> {
         })?;
         self.snapshots.push((self.day, name));
         Ok(())
+    }
+}
+
+/// What the schedules may refer to in this mesh: blocks with their lifts, and
+/// each joint's zones with the lifts of both blocks they span.
+pub fn dam_layout(mesh: &Mesh) -> DamLayout {
+    let lift_at = |block: u32, z: f64| -> u32 {
+        let b = &mesh.blocks[block as usize - 1];
+        ((z - b.foundation_z) / mesh.lift_height).round() as u32
+    };
+    let zones = mesh
+        .zones
+        .iter()
+        .map(|z| {
+            let side = |block: u32| {
+                (
+                    block,
+                    lift_at(block, z.z_bottom) + 1,
+                    lift_at(block, z.z_top),
+                )
+            };
+            ZoneExtent {
+                joint: z.joint,
+                zone: z.zone,
+                lifts_a: side(z.joint),
+                lifts_b: side(z.joint + 1),
+            }
+        })
+        .collect();
+    DamLayout {
+        blocks: mesh.blocks.iter().map(|b| (b.block, b.n_lifts)).collect(),
+        zones,
     }
 }

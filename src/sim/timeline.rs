@@ -49,7 +49,7 @@ impl Timeline {
 }
 
 /// The step ladder state: the nominal step grows between events.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ladder {
     pub nominal: f64,
 }

@@ -30,4 +30,4 @@ pub mod live;
 pub mod model;
 
 pub use ledger::HeatLedger;
-pub use model::{ThermalError, ThermalModel, ThermalState, ThermalStats};
+pub use model::{ThermalCheckpoint, ThermalError, ThermalModel, ThermalState, ThermalStats};

@@ -79,6 +79,15 @@ pub struct ThermalState {
     pub ledger: HeatLedger,
 }
 
+/// A thermal model's restart data ([`ThermalModel::checkpoint`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ThermalCheckpoint {
+    pub state: ThermalState,
+    pub stages: Vec<PlannedStage>,
+    /// (block, lift, pour day)
+    pub lift_pour_day: Vec<(u32, u32, f64)>,
+}
+
 pub struct ThermalModel {
     pub data: ElementData,
     rise: Option<AdiabaticRise>,
@@ -311,6 +320,98 @@ impl ThermalModel {
         } else {
             f64::NAN
         }
+    }
+
+    /// Capacity-weighted mean temperature of lifts `from..=to` of `block`,
+    /// if every one of them is live.
+    pub fn lifts_mean(&self, block: u32, from: u32, to: u32) -> Option<f64> {
+        let (mut heat, mut cap) = (0.0, 0.0);
+        for lift in from..=to {
+            for &e in self.lift_elems.get(&(block, lift))? {
+                if !self.state.live[e as usize] {
+                    return None;
+                }
+                heat += self.data.stored_heat(e as usize, &self.state.temperature);
+                cap += self.data.cap_lumped[e as usize].iter().sum::<f64>();
+            }
+        }
+        (cap > 0.0).then(|| heat / cap)
+    }
+
+    /// What a restart needs besides the schedules: the state, the stages as
+    /// they were planned (to match statuses to a new cooling.csv) and the
+    /// pour days.
+    pub fn checkpoint(&self) -> ThermalCheckpoint {
+        let mut lift_pour_day: Vec<(u32, u32, f64)> = self
+            .lift_pour_day
+            .iter()
+            .map(|(&(b, l), &d)| (b, l, d))
+            .collect();
+        lift_pour_day.sort_by_key(|&(b, l, _)| (b, l));
+        ThermalCheckpoint {
+            state: self.state.clone(),
+            stages: self.stages.clone(),
+            lift_pour_day,
+        }
+    }
+
+    /// Restores a checkpoint into a model built for (possibly edited)
+    /// schedules. A stage of the new cooling.csv takes the status of the
+    /// checkpoint's stage with the same block, lifts, kind of rows and start;
+    /// a stage with no match must start on or after the checkpoint's day
+    /// (the caller restarts before the first changed date) and is pending.
+    pub fn restore(&mut self, ck: &ThermalCheckpoint) {
+        let key = |st: &PlannedStage| (st.block, st.lift_from, st.lift_to, st.start_day.to_bits());
+        let old: HashMap<_, &StageStatus> = ck
+            .stages
+            .iter()
+            .zip(&ck.state.status)
+            .map(|(st, status)| (key(st), status))
+            .collect();
+        let status: Vec<StageStatus> = self
+            .stages
+            .iter()
+            .map(|st| {
+                old.get(&key(st))
+                    .map_or(StageStatus::Pending, |s| (*s).clone())
+            })
+            .collect();
+        self.state = ThermalState {
+            status,
+            ..ck.state.clone()
+        };
+        self.lift_pour_day = ck
+            .lift_pour_day
+            .iter()
+            .map(|&(b, l, d)| ((b, l), d))
+            .collect();
+        // A later stage on a lift ends the one before it: replay the starts in order.
+        let mut active: Vec<(f64, usize)> = self
+            .state
+            .status
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| match s {
+                StageStatus::Active { start_day, .. } => Some((*start_day, i)),
+                _ => None,
+            })
+            .collect();
+        active.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        self.lift_stage.clear();
+        for (_, i) in active {
+            let st = &self.stages[i];
+            for lift in st.lift_from..=st.lift_to {
+                self.lift_stage.insert((st.block, lift), i);
+            }
+        }
+        self.faces = FaceCounter::default();
+        for (e, &live) in self.state.live.iter().enumerate() {
+            if live {
+                self.faces.add_element(e as u32, &self.data.dofs[e]);
+            }
+        }
+        self.sys = None;
+        self.dirty = true;
     }
 
     /// Mean temperature of the concrete of (block, lift) elements, if live.

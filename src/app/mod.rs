@@ -1,12 +1,15 @@
 //! What `groutready run` does, as a library call: load and check every input,
 //! only then simulate, and write the run folder atomically.
 
+pub mod plan;
+pub mod restart;
+
 use std::path::{Path, PathBuf};
 
 use crate::mesh::{self, geometry::Geometry, Mesh};
 use crate::output::{self, RunDir};
 use crate::scene::Scene;
-use crate::schedule::{self, DamLayout, Schedules, ZoneExtent};
+use crate::schedule::{self, Schedules};
 use crate::sim::{RunStats, Simulation};
 
 #[derive(Debug, thiserror::Error)]
@@ -24,6 +27,10 @@ pub enum AppError {
     NoSchedules(String),
     #[error(transparent)]
     Sim(#[from] crate::sim::SimError),
+    #[error(transparent)]
+    Checkpoint(#[from] crate::sim::checkpoint::CheckpointError),
+    #[error(transparent)]
+    Report(#[from] crate::report::ReportError),
     #[error("{path}: {source}")]
     Io {
         path: String,
@@ -31,7 +38,7 @@ pub enum AppError {
     },
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AppError + '_ {
+pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AppError + '_ {
     move |source| AppError::Io {
         path: path.display().to_string(),
         source,
@@ -59,37 +66,7 @@ pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
     })
 }
 
-/// What the schedules may refer to in this mesh: blocks with their lifts, and
-/// each joint's zones with the lifts of both blocks they span.
-pub fn dam_layout(mesh: &Mesh) -> DamLayout {
-    let lift_at = |block: u32, z: f64| -> u32 {
-        let b = &mesh.blocks[block as usize - 1];
-        ((z - b.foundation_z) / mesh.lift_height).round() as u32
-    };
-    let zones = mesh
-        .zones
-        .iter()
-        .map(|z| {
-            let side = |block: u32| {
-                (
-                    block,
-                    lift_at(block, z.z_bottom) + 1,
-                    lift_at(block, z.z_top),
-                )
-            };
-            ZoneExtent {
-                joint: z.joint,
-                zone: z.zone,
-                lifts_a: side(z.joint),
-                lifts_b: side(z.joint + 1),
-            }
-        })
-        .collect();
-    DamLayout {
-        blocks: mesh.blocks.iter().map(|b| (b.block, b.n_lifts)).collect(),
-        zones,
-    }
-}
+pub use crate::sim::dam_layout;
 
 /// Loads scene, schedules and mesh and checks them against each other.
 pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<Inputs, AppError> {
@@ -180,7 +157,7 @@ pub fn run(
     })
 }
 
-fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
+pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
     let mut s = format!(
         "scene: {} ({})\nepoch: {}\neffects: {:?}\nelements: {}\nthermal dofs: {}\nsteps: {}\npours: {}\nwall seconds: {:.2}\n",
         inputs.scene.name,

@@ -1,0 +1,133 @@
+//! What `groutready plan` does, as a library call: load and check every
+//! input, restart from the run folder's checkpoints when the scene is the
+//! same, plan, and write the run folder atomically (reports, histories,
+//! remedied schedules, checkpoints for the next weekly update).
+
+use std::path::{Path, PathBuf};
+
+use chrono::NaiveDate;
+
+use crate::output::{self, RunDir};
+use crate::planner::{self, Plan, PlanOptions, Progress};
+use crate::schedule;
+
+use super::restart;
+use super::{io_err, run_text, AppError, Inputs};
+
+/// Options of one plan.
+#[derive(Debug, Clone, Default)]
+pub struct PlanRequest {
+    pub as_of: Option<NaiveDate>,
+    /// overrides the scene's `planner.horizon_days`
+    pub horizon_days: Option<u32>,
+    /// ignore the run folder's checkpoints
+    pub from_scratch: bool,
+}
+
+/// A finished plan and where it was written.
+pub struct PlanSummary {
+    pub out: PathBuf,
+    pub plan: Plan,
+    /// remedied schedules written to `out/remedied`
+    pub remedied: bool,
+    /// zones groutable as scheduled that the remedies make not groutable
+    pub newly_flagged: Vec<(u32, u32, String)>,
+    pub checkpoints_kept: usize,
+}
+
+/// The folder of the remedied schedules inside a run folder.
+pub const REMEDIED_DIR: &str = "remedied";
+
+pub fn plan(
+    inputs: &Inputs,
+    out: &Path,
+    request: &PlanRequest,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PlanSummary, AppError> {
+    let scene = &inputs.scene;
+    let options = PlanOptions {
+        as_of: request.as_of,
+        horizon_days: request.horizon_days.or(scene.planner.horizon_days),
+    };
+    // The restart may not be later than this plan's own end.
+    let epoch = scene.epoch;
+    let as_of = options.as_of.unwrap_or_else(|| {
+        planner::plan::default_as_of(&inputs.schedules, chrono::Local::now().date_naive())
+    });
+    let end = inputs
+        .schedules
+        .grouting
+        .iter()
+        .map(|g| (g.planned - epoch).num_days() as f64)
+        .filter(|&d| {
+            options
+                .horizon_days
+                .is_none_or(|h| d <= (as_of - epoch).num_days() as f64 + h as f64)
+        })
+        .fold((as_of - epoch).num_days() as f64, f64::max);
+    let previous = if request.from_scratch {
+        None
+    } else {
+        restart::find(out, scene, &inputs.schedules, end)?
+    };
+    let options = PlanOptions {
+        as_of: Some(as_of),
+        ..options
+    };
+    let prev_dir = previous.as_ref().map(|p| p.dir.clone());
+    let out_plan = planner::plan(
+        scene,
+        &inputs.mesh,
+        &inputs.schedules,
+        &options,
+        previous.map(|p| (p.checkpoint, p.history)),
+        progress,
+    )?;
+
+    let staging = RunDir::create(out).map_err(io_err(out))?;
+    let dir = staging.path();
+    crate::report::write_all(dir, &out_plan.plan)?;
+    let h = &out_plan.history;
+    if !h.records.rows.is_empty() {
+        let p = dir.join("temperatures.csv");
+        output::temperatures::write(&p, epoch, &h.records).map_err(io_err(&p))?;
+    }
+    if !h.joint_records.columns.is_empty() {
+        let p = dir.join("apertures.csv");
+        let extra = inputs
+            .schedules
+            .grouting
+            .iter()
+            .map(|g| (g.planned - epoch).num_days())
+            .collect();
+        output::apertures::write(&p, epoch, &h.joint_records, &extra).map_err(io_err(&p))?;
+    }
+    if let Some(s) = &out_plan.remedied {
+        let p = dir.join(REMEDIED_DIR);
+        schedule::write_dir(s, &p).map_err(io_err(&p))?;
+    }
+    let keep_from = (as_of - epoch).num_days() as f64 - 2.0 * scene.planner.checkpoint_days as f64;
+    let checkpoints_kept = restart::save(
+        dir,
+        scene,
+        &inputs.schedules,
+        h,
+        &out_plan.checkpoints,
+        keep_from,
+        prev_dir.as_deref(),
+    )?;
+    let p = dir.join("run.txt");
+    std::fs::write(&p, run_text(inputs, &out_plan.baseline)).map_err(io_err(&p))?;
+    let out = staging.commit().map_err(io_err(out))?;
+    Ok(PlanSummary {
+        out,
+        remedied: out_plan.remedied.is_some(),
+        newly_flagged: out_plan
+            .newly_flagged
+            .iter()
+            .map(|z| (z.joint, z.zone, z.reasons()))
+            .collect(),
+        plan: out_plan.plan,
+        checkpoints_kept,
+    })
+}

@@ -1,0 +1,251 @@
+//! Schedule edits a remedy makes, and the first date two schedules differ
+//! (where a re-simulation may restart).
+
+use std::collections::{BTreeMap, HashMap};
+
+use chrono::NaiveDate;
+
+use crate::schedule::{CoolingStage, DamLayout, Schedules};
+
+/// Supercooling of one zone: lower the target of the cooling stage that
+/// brings its lifts (and the lifts `lifts_above` higher) to closure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Supercool {
+    pub joint: u32,
+    pub zone: u32,
+    pub delta_c: f64,
+    /// the zone's grouting date: the stage edited is the last one with a
+    /// target that starts before it, and it runs until its new target or
+    /// this date
+    pub planned: NaiveDate,
+}
+
+/// The lifts a zone's supercooling cools: (block, lift) → the zone's
+/// grouting date.
+fn cooled_lifts(layout: &DamLayout, z: &Supercool, lifts_above: u32) -> Vec<(u32, u32)> {
+    let Some(ext) = layout.zone(z.joint, z.zone) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (block, from, to) in ext.sides() {
+        let n = layout.n_lifts(block).unwrap_or(to);
+        for lift in from..=(to + lifts_above).min(n) {
+            out.push((block, lift));
+        }
+    }
+    out
+}
+
+/// Index of the stage to supercool on (block, lift): the latest-starting
+/// stage with a target that starts before `before`.
+fn stage_to_edit(
+    cooling: &[CoolingStage],
+    block: u32,
+    lift: u32,
+    before: NaiveDate,
+) -> Option<usize> {
+    cooling
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.covers(block, lift) && c.start < before && c.target_temp_c.is_some())
+        .max_by_key(|(i, c)| (c.start, *i))
+        .map(|(i, _)| i)
+}
+
+/// The coldest cooling water a site's chillers deliver [°C].
+pub const MIN_WATER_C: f64 = 4.0;
+
+/// Applies supercooling to `schedules`. Lifts requested by several zones take
+/// the largest ΔT. A stage row whose lifts get different ΔT is split into
+/// runs of equal ΔT. The edited rows keep cooling until their lowered target
+/// or the latest grouting date of the zones they serve (the water is lowered
+/// too where it would not stay 1 °C below the new target). Returns the
+/// zones none of whose lifts could be edited (no stage with a target).
+pub fn supercool(
+    schedules: &Schedules,
+    layout: &DamLayout,
+    zones: &[Supercool],
+    lifts_above: u32,
+) -> (Schedules, Vec<(u32, u32)>) {
+    // (row, lift) → (ΔT, latest grouting date)
+    let mut per_lift: HashMap<(usize, u32), (f64, NaiveDate)> = HashMap::new();
+    let mut not_editable = Vec::new();
+    for z in zones.iter().filter(|z| z.delta_c > 0.0) {
+        let mut any = false;
+        for (block, lift) in cooled_lifts(layout, z, lifts_above) {
+            if let Some(row) = stage_to_edit(&schedules.cooling, block, lift, z.planned) {
+                any = true;
+                let e = per_lift.entry((row, lift)).or_insert((0.0, z.planned));
+                e.0 = e.0.max(z.delta_c);
+                e.1 = e.1.max(z.planned);
+            }
+        }
+        if !any {
+            not_editable.push((z.joint, z.zone));
+        }
+    }
+    let mut out = schedules.clone();
+    out.cooling.clear();
+    for (row, c) in schedules.cooling.iter().enumerate() {
+        // Runs of consecutive lifts with equal edits.
+        let mut runs: Vec<(u32, u32, Option<(f64, NaiveDate)>)> = Vec::new();
+        for lift in c.lift_from..=c.lift_to {
+            let e = per_lift.get(&(row, lift)).copied();
+            match runs.last_mut() {
+                Some(r) if r.2 == e => r.1 = lift,
+                _ => runs.push((lift, lift, e)),
+            }
+        }
+        for (from, to, e) in runs {
+            let mut s = CoolingStage {
+                lift_from: from,
+                lift_to: to,
+                ..c.clone()
+            };
+            if let Some((dt, until)) = e {
+                // Colder water, not only a lower target: a stage that has
+                // not reached its target by the grouting date would
+                // otherwise cool exactly as before.
+                let target = c.target_temp_c.unwrap_or(0.0) - dt;
+                s.target_temp_c = Some(target);
+                s.water_temp_c = (s.water_temp_c - dt)
+                    .max(MIN_WATER_C)
+                    .min(target - 1.0)
+                    .max(0.0);
+                s.end = s.end.map(|end| end.max(until));
+            }
+            out.cooling.push(s);
+        }
+    }
+    (out, not_editable)
+}
+
+/// Moves the grouting of zones to new dates.
+pub fn regrout(schedules: &Schedules, moves: &[(u32, u32, NaiveDate)]) -> Schedules {
+    let mut out = schedules.clone();
+    for g in &mut out.grouting {
+        if let Some(m) = moves.iter().find(|m| m.0 == g.joint && m.1 == g.zone) {
+            g.planned = m.2;
+        }
+    }
+    out
+}
+
+/// Drops the grouting of zones (for the delay search).
+pub fn ungrout(schedules: &Schedules, zones: &[(u32, u32)]) -> Schedules {
+    let mut out = schedules.clone();
+    out.grouting.retain(|g| !zones.contains(&(g.joint, g.zone)));
+    out
+}
+
+/// The first date on which a simulation of `b` may differ from one of `a`
+/// (None: the same events). Pours and grouting: the earlier of the two dates
+/// of a changed row. Cooling: the start of a changed stage, or the earlier end
+/// when only the end moved. Weather and reservoir: the date before the first
+/// differing row (levels are interpolated between rows).
+pub fn first_change(a: &Schedules, b: &Schedules) -> Option<NaiveDate> {
+    let mut first: Option<NaiveDate> = None;
+    let mut at = |d: NaiveDate| first = Some(first.map_or(d, |f| f.min(d)));
+
+    let pours = |s: &Schedules| -> BTreeMap<(u32, u32), (NaiveDate, u64)> {
+        s.pours
+            .iter()
+            .map(|p| ((p.block, p.lift), (p.date, p.placement_temp_c.to_bits())))
+            .collect()
+    };
+    diff_maps(&pours(a), &pours(b), |x| x.0, &mut at);
+
+    let grout = |s: &Schedules| -> BTreeMap<(u32, u32), NaiveDate> {
+        s.grouting
+            .iter()
+            .map(|g| ((g.joint, g.zone), g.planned))
+            .collect()
+    };
+    diff_maps(&grout(a), &grout(b), |x| *x, &mut at);
+
+    // A stage is its block, lifts, kind and start; the rest may change.
+    type Key = (u32, u32, u32, u8, NaiveDate);
+    let stages = |s: &Schedules| -> BTreeMap<Key, (Option<NaiveDate>, u64, Option<u64>)> {
+        s.cooling
+            .iter()
+            .map(|c| {
+                (
+                    (c.block, c.lift_from, c.lift_to, c.stage as u8, c.start),
+                    (
+                        c.end,
+                        c.water_temp_c.to_bits(),
+                        c.target_temp_c.map(f64::to_bits),
+                    ),
+                )
+            })
+            .collect()
+    };
+    let (sa, sb) = (stages(a), stages(b));
+    for (k, va) in &sa {
+        match sb.get(k) {
+            None => at(k.4),
+            Some(vb) if vb == va => {}
+            Some(vb) if vb.1 == va.1 && vb.2 == va.2 => {
+                // only the end moved: the stage runs alike until the earlier end
+                let end = match (va.0, vb.0) {
+                    (Some(x), Some(y)) => x.min(y),
+                    (Some(x), None) | (None, Some(x)) => x,
+                    (None, None) => k.4,
+                };
+                at(end.max(k.4));
+            }
+            Some(_) => at(k.4),
+        }
+    }
+    for k in sb.keys().filter(|k| !sa.contains_key(k)) {
+        at(k.4);
+    }
+
+    for (x, y) in [(&a.weather, &b.weather), (&a.reservoir, &b.reservoir)] {
+        let (x, y) = (x.as_deref().unwrap_or(&[]), y.as_deref().unwrap_or(&[]));
+        let n = x.len().min(y.len());
+        let differ = (0..n).find(|&i| x[i].0 != y[i].0 || x[i].1.to_bits() != y[i].1.to_bits());
+        let i = match differ {
+            Some(i) => Some(i),
+            None if x.len() != y.len() => Some(n),
+            None => None,
+        };
+        if let Some(i) = i {
+            // The segment before the first differing row is interpolated
+            // towards it already.
+            let d = if i == 0 {
+                [x.first(), y.first()]
+                    .into_iter()
+                    .flatten()
+                    .map(|r| r.0)
+                    .min()
+            } else {
+                Some(x[i - 1].0)
+            };
+            if let Some(d) = d {
+                at(d);
+            }
+        }
+    }
+    first
+}
+
+fn diff_maps<K: Ord, V: PartialEq>(
+    a: &BTreeMap<K, V>,
+    b: &BTreeMap<K, V>,
+    date: impl Fn(&V) -> NaiveDate,
+    at: &mut impl FnMut(NaiveDate),
+) {
+    for (k, va) in a {
+        match b.get(k) {
+            Some(vb) if vb == va => {}
+            Some(vb) => at(date(va).min(date(vb))),
+            None => at(date(va)),
+        }
+    }
+    for (k, vb) in b {
+        if !a.contains_key(k) {
+            at(date(vb));
+        }
+    }
+}

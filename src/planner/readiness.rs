@@ -1,0 +1,248 @@
+//! What the planner answers per grouting zone: the rules checked on the
+//! planned date, the verdict, and the remedy found. Plain data, read by the
+//! report writers and the TUI.
+
+use chrono::NaiveDate;
+use serde::Serialize;
+
+use super::settings::PlannerSettings;
+
+/// A readiness rule.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rule {
+    /// aperture at the deciding point ≥ `min_aperture_mm`
+    Aperture,
+    /// both adjacent blocks at or below closure + tolerance over the zone
+    Temperature,
+    /// youngest lift of the zone at least `min_age_days` old
+    Age,
+    /// at least `min_cover_m` of concrete above the zone on both blocks
+    Cover,
+    /// the zone below on the same joint grouted on or before this date
+    BottomUp,
+}
+
+impl Rule {
+    pub const ALL: [Rule; 5] = [
+        Rule::Aperture,
+        Rule::Temperature,
+        Rule::Age,
+        Rule::Cover,
+        Rule::BottomUp,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Rule::Aperture => "aperture",
+            Rule::Temperature => "temperature",
+            Rule::Age => "age",
+            Rule::Cover => "cover",
+            Rule::BottomUp => "bottom_up",
+        }
+    }
+}
+
+/// One rule checked on one zone.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RuleCheck {
+    pub rule: Rule,
+    /// the value checked (mm, °C, days, m; for bottom-up the days the zone
+    /// below is grouted before this one), None where it could not be measured
+    pub value: Option<f64>,
+    /// the limit it is checked against, same unit
+    pub limit: f64,
+    pub passed: bool,
+    /// plain words, set when the rule fails
+    pub reason: Option<String>,
+}
+
+/// Apertures of a zone on one date [mm]; None where the zone's two blocks do
+/// not both exist yet.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Apertures {
+    pub upstream: Option<f64>,
+    pub center: Option<f64>,
+    pub downstream: Option<f64>,
+    pub min: Option<f64>,
+}
+
+/// The planner's verdict on a zone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// every rule passes
+    Groutable,
+    /// every rule passes, but the aperture is below `marginal_aperture_mm`
+    Marginal,
+    /// at least one rule fails
+    NotGroutable,
+}
+
+impl Verdict {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Groutable => "groutable",
+            Verdict::Marginal => "marginal",
+            Verdict::NotGroutable => "not_groutable",
+        }
+    }
+
+    pub fn groutable(self) -> bool {
+        self != Verdict::NotGroutable
+    }
+}
+
+/// Readiness of one (joint, zone) on its planned date.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZoneReadiness {
+    pub joint: u32,
+    pub zone: u32,
+    pub planned: NaiveDate,
+    /// grouted before the as-of date: history, not in the readiness table
+    pub history: bool,
+    pub z_bottom_m: f64,
+    pub z_top_m: f64,
+    pub apertures_mm: Apertures,
+    /// mean temperature of the zone's concrete in block `joint` (A) and
+    /// `joint + 1` (B) on the planned date [°C]
+    pub temp_a_c: Option<f64>,
+    pub temp_b_c: Option<f64>,
+    pub closure_temp_c: f64,
+    /// age of the zone's youngest lift on the planned date [days]
+    pub age_days: Option<f64>,
+    /// least height of concrete above the zone's top over both blocks [m];
+    /// None where both blocks are complete (the rule is waived)
+    pub cover_m: Option<f64>,
+    pub checks: Vec<RuleCheck>,
+    pub verdict: Verdict,
+    /// first date after grouting on which a point of the zone re-opened
+    /// (the grout layer cracked), within the simulated period
+    pub reopened: Option<NaiveDate>,
+    pub remedy: Option<Remedy>,
+}
+
+impl ZoneReadiness {
+    /// The failed rules' reasons, joined for one table cell.
+    pub fn reasons(&self) -> String {
+        self.checks
+            .iter()
+            .filter_map(|c| c.reason.as_deref())
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+}
+
+/// Supercooling of the zone's second-stage cooling (and the region above).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SupercoolOption {
+    /// lowering of the cooling target [°C]
+    pub delta_c: f64,
+    /// aperture at the deciding point on the planned date with it [mm]
+    pub aperture_mm: f64,
+}
+
+/// Delay of the zone's grouting.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DelayOption {
+    pub days: u32,
+    pub date: NaiveDate,
+    /// aperture at the deciding point on the new date [mm]
+    pub aperture_mm: f64,
+    /// zones above on the same joint that move with it (bottom-up order)
+    pub also_delayed: Vec<u32>,
+}
+
+/// Which remedy the planner proposes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RemedyChoice {
+    Supercool,
+    Delay,
+    /// neither works within the limits
+    None,
+}
+
+/// The remedies found for a zone that is not groutable, each verified by
+/// re-simulation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Remedy {
+    pub supercool: Option<SupercoolOption>,
+    pub delay: Option<DelayOption>,
+    pub choice: RemedyChoice,
+    /// the verdict and deciding aperture of this zone when every proposed
+    /// remedy is applied together and re-simulated
+    pub verified: Option<(Verdict, Option<f64>)>,
+    /// plain words: why this remedy, or why none works
+    pub note: String,
+}
+
+/// Aperture and temperature history of one zone, for charts.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZoneHistory {
+    pub joint: u32,
+    pub zone: u32,
+    pub planned: NaiveDate,
+    pub dates: Vec<NaiveDate>,
+    /// [mm] per date
+    pub upstream: Vec<Option<f64>>,
+    pub center: Vec<Option<f64>>,
+    pub downstream: Vec<Option<f64>>,
+    pub min: Vec<Option<f64>>,
+    /// mean temperature of the zone's concrete (both blocks) [°C]
+    pub temperature: Vec<Option<f64>>,
+}
+
+/// One joint-meter reading against the prediction at its point and date.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeterComparison {
+    pub joint: u32,
+    pub zone: u32,
+    /// upstream, center, downstream or min
+    pub point: String,
+    pub date: NaiveDate,
+    pub measured_mm: f64,
+    /// None where the zone did not exist yet on that date in the simulation
+    pub predicted_mm: Option<f64>,
+}
+
+/// How the plan was computed.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PlanStats {
+    /// seconds of the baseline simulation (from day 0 or a restart)
+    pub baseline_seconds: f64,
+    /// first day simulated by the baseline: None from scratch, else the date
+    /// of the checkpoint it restarted from
+    pub restarted_from: Option<NaiveDate>,
+    /// re-simulations of the remedy search and their total seconds
+    pub resimulations: usize,
+    pub resimulation_seconds: f64,
+    pub total_seconds: f64,
+}
+
+/// The planner's answer for one scene and one set of schedules.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Plan {
+    pub scene: String,
+    pub as_of: NaiveDate,
+    pub settings: PlannerSettings,
+    /// every (joint, zone) of grouting.csv, by planned date then joint, zone
+    pub zones: Vec<ZoneReadiness>,
+    /// histories of the zones still to grout that are flagged (and of the
+    /// zones with joint meters)
+    pub histories: Vec<ZoneHistory>,
+    pub meters: Vec<MeterComparison>,
+    pub stats: PlanStats,
+}
+
+impl Plan {
+    /// Zones still to grout (planned on or after the as-of date).
+    pub fn to_grout(&self) -> impl Iterator<Item = &ZoneReadiness> {
+        self.zones.iter().filter(|z| !z.history)
+    }
+
+    /// Zones still to grout that are not groutable.
+    pub fn flagged(&self) -> impl Iterator<Item = &ZoneReadiness> {
+        self.to_grout().filter(|z| !z.verdict.groutable())
+    }
+}

@@ -1,0 +1,432 @@
+//! The readiness rules of one zone on one day, read from a run's histories.
+//!
+//! Aperture: the deciding point's aperture (zone minimum by default) on the
+//! day. Temperature: the capacity-weighted mean temperature of the zone's
+//! lifts in each of the two blocks, against the closure temperature at the
+//! zone's mid-height plus the tolerance. Age: the youngest lift of the zone
+//! (both blocks) on the day. Cover: the concrete poured above the zone's top
+//! on each block that is not yet complete. Bottom-up: the next lower zone of
+//! the same joint is grouted on or before the day.
+
+use std::collections::HashMap;
+
+use chrono::NaiveDate;
+
+use crate::mesh::PointKind;
+use crate::schedule::{DamLayout, Schedules, ZoneExtent};
+use crate::sim::{History, JointColumnKind};
+
+use super::readiness::{Apertures, Rule, RuleCheck, Verdict, ZoneReadiness};
+use super::settings::{DecidingPoint, PlannerSettings};
+
+/// What the rules need besides a run's histories: the schedules as run, the
+/// dam's zones and the settings.
+pub struct Rules<'a> {
+    pub settings: &'a PlannerSettings,
+    pub layout: &'a DamLayout,
+    pub epoch: NaiveDate,
+    pub lift_height: f64,
+    /// (block) → (foundation elevation, number of lifts)
+    pub blocks: HashMap<u32, (f64, u32)>,
+    /// (joint, zone) → (z_bottom, z_top)
+    pub zone_z: HashMap<(u32, u32), (f64, f64)>,
+    /// (block, lift) → pour day
+    pour_day: HashMap<(u32, u32), i64>,
+}
+
+/// Column indices of one zone in a [`History`].
+#[derive(Debug, Clone, Copy, Default)]
+struct ZoneColumns {
+    upstream: Option<usize>,
+    center: Option<usize>,
+    downstream: Option<usize>,
+    min: Option<usize>,
+    temps: Option<usize>,
+}
+
+/// Fast lookups into a [`History`].
+pub struct HistoryIndex<'h> {
+    pub history: &'h History,
+    zones: HashMap<(u32, u32), ZoneColumns>,
+}
+
+impl<'h> HistoryIndex<'h> {
+    pub fn new(history: &'h History) -> HistoryIndex<'h> {
+        let mut zones: HashMap<(u32, u32), ZoneColumns> = HashMap::new();
+        for (i, &(joint, zone, kind)) in history.joint_records.columns.iter().enumerate() {
+            let c = zones.entry((joint, zone)).or_default();
+            match kind {
+                JointColumnKind::Point { kind, .. } => match kind {
+                    PointKind::Upstream => c.upstream = Some(i),
+                    PointKind::Center => c.center = Some(i),
+                    PointKind::Downstream => c.downstream = Some(i),
+                },
+                JointColumnKind::Min => c.min = Some(i),
+            }
+        }
+        for (i, z) in history.zone_temps.zones.iter().enumerate() {
+            zones.entry((z.joint, z.zone)).or_default().temps = Some(i);
+        }
+        HistoryIndex { history, zones }
+    }
+
+    fn joint_row(&self, day: f64) -> Option<usize> {
+        let rows = &self.history.joint_records.rows;
+        rows.binary_search_by(|r| r.0.total_cmp(&day)).ok()
+    }
+
+    /// Apertures of a zone on a recorded day [mm].
+    pub fn apertures(&self, joint: u32, zone: u32, day: f64) -> Apertures {
+        let (Some(c), Some(r)) = (self.zones.get(&(joint, zone)), self.joint_row(day)) else {
+            return Apertures::default();
+        };
+        let row = &self.history.joint_records.rows[r].1;
+        let mm = |i: Option<usize>| i.and_then(|i| row[i]).map(|s| s.aperture * 1e3);
+        Apertures {
+            upstream: mm(c.upstream),
+            center: mm(c.center),
+            downstream: mm(c.downstream),
+            min: mm(c.min),
+        }
+    }
+
+    /// The first recorded day after `after` on which a point of the zone is
+    /// labelled `reopened`.
+    pub fn reopened_after(&self, joint: u32, zone: u32, after: f64) -> Option<f64> {
+        let c = self.zones.get(&(joint, zone))?;
+        let cols: Vec<usize> = [c.upstream, c.center, c.downstream, c.min]
+            .into_iter()
+            .flatten()
+            .collect();
+        self.history
+            .joint_records
+            .rows
+            .iter()
+            .filter(|r| r.0 > after)
+            .find(|r| {
+                cols.iter()
+                    .any(|&i| r.1[i].is_some_and(|s| s.state == "reopened"))
+            })
+            .map(|r| r.0)
+    }
+
+    /// Mean temperature of the zone's concrete in blocks A and B on a
+    /// recorded day (None where not all its lifts are poured, or no thermal model).
+    pub fn block_temps(&self, joint: u32, zone: u32, day: f64) -> [Option<f64>; 2] {
+        let rows = &self.history.zone_temps.rows;
+        let (Some(i), Ok(r)) = (
+            self.zones.get(&(joint, zone)).and_then(|c| c.temps),
+            rows.binary_search_by(|r| r.0.total_cmp(&day)),
+        ) else {
+            return [None, None];
+        };
+        let t = rows[r].1[i];
+        [t[0], t[1]].map(|v| v.is_finite().then_some(v))
+    }
+
+    /// Recorded days in `[from, to]`.
+    pub fn days_between(&self, from: f64, to: f64) -> impl Iterator<Item = f64> + '_ {
+        self.history
+            .joint_records
+            .rows
+            .iter()
+            .map(|r| r.0)
+            .filter(move |&d| d >= from && d <= to)
+    }
+}
+
+impl<'a> Rules<'a> {
+    pub fn new(
+        settings: &'a PlannerSettings,
+        layout: &'a DamLayout,
+        mesh: &crate::mesh::Mesh,
+        epoch: NaiveDate,
+        schedules: &Schedules,
+    ) -> Rules<'a> {
+        let mut rules = Rules {
+            settings,
+            layout,
+            epoch,
+            lift_height: mesh.lift_height,
+            blocks: mesh
+                .blocks
+                .iter()
+                .map(|b| (b.block, (b.foundation_z, b.n_lifts)))
+                .collect(),
+            zone_z: mesh
+                .zones
+                .iter()
+                .map(|z| ((z.joint, z.zone), (z.z_bottom, z.z_top)))
+                .collect(),
+            pour_day: HashMap::new(),
+        };
+        rules.set_pours(schedules);
+        rules
+    }
+
+    fn set_pours(&mut self, schedules: &Schedules) {
+        self.pour_day = schedules
+            .pours
+            .iter()
+            .map(|p| ((p.block, p.lift), (p.date - self.epoch).num_days()))
+            .collect();
+    }
+
+    pub fn date(&self, day: f64) -> NaiveDate {
+        self.epoch + chrono::Duration::days(day.floor() as i64)
+    }
+
+    pub fn day(&self, date: NaiveDate) -> f64 {
+        (date - self.epoch).num_days() as f64
+    }
+
+    fn deciding(&self, a: &Apertures) -> Option<f64> {
+        match self.settings.aperture_point {
+            DecidingPoint::Min => a.min,
+            DecidingPoint::Upstream => a.upstream,
+            DecidingPoint::Center => a.center,
+            DecidingPoint::Downstream => a.downstream,
+        }
+    }
+
+    /// The deciding aperture of a zone on a day [mm].
+    pub fn deciding_aperture(
+        &self,
+        h: &HistoryIndex,
+        joint: u32,
+        zone: u32,
+        day: f64,
+    ) -> Option<f64> {
+        self.deciding(&h.apertures(joint, zone, day))
+    }
+
+    /// The next lower zone of `joint` below `zone` that exists in the dam.
+    pub fn zone_below(&self, joint: u32, zone: u32) -> Option<u32> {
+        self.layout
+            .zones
+            .iter()
+            .filter(|z| z.joint == joint && z.zone < zone)
+            .map(|z| z.zone)
+            .max()
+    }
+
+    /// Checks every rule for (joint, zone) grouted on `day`; `grout_day`
+    /// gives the grouting day of every zone as planned in the run.
+    pub fn evaluate(
+        &self,
+        h: &HistoryIndex,
+        joint: u32,
+        zone: u32,
+        day: f64,
+        grout_day: &HashMap<(u32, u32), f64>,
+    ) -> ZoneReadiness {
+        let s = self.settings;
+        let ext = self.layout.zone(joint, zone).copied();
+        let (z_bottom, z_top) = self
+            .zone_z
+            .get(&(joint, zone))
+            .copied()
+            .unwrap_or((f64::NAN, f64::NAN));
+        let closure = s.closure_temp_at(0.5 * (z_bottom + z_top));
+        let apertures = h.apertures(joint, zone, day);
+        let mut checks = Vec::with_capacity(5);
+
+        // Aperture.
+        let a = self.deciding(&apertures);
+        let point = s.aperture_point.as_str();
+        checks.push(match a {
+            Some(v) => RuleCheck {
+                rule: Rule::Aperture,
+                value: Some(v),
+                limit: s.min_aperture_mm,
+                passed: v >= s.min_aperture_mm,
+                reason: (v < s.min_aperture_mm).then(|| {
+                    format!(
+                        "aperture {v:.2} mm at the {point} point is below {:.2} mm",
+                        s.min_aperture_mm
+                    )
+                }),
+            },
+            None => RuleCheck {
+                rule: Rule::Aperture,
+                value: None,
+                limit: s.min_aperture_mm,
+                passed: false,
+                reason: Some("the joint does not exist yet on this date (a block is not poured up to the zone)".into()),
+            },
+        });
+
+        // Temperature.
+        let [ta, tb] = h.block_temps(joint, zone, day);
+        let limit = closure + s.closure_tolerance_c;
+        let temp_check = match (ta, tb, ext) {
+            (Some(ta), Some(tb), Some(e)) => {
+                let mut hot = Vec::new();
+                for (t, (block, ..)) in [(ta, e.lifts_a), (tb, e.lifts_b)] {
+                    if t > limit {
+                        hot.push(format!("block {block} is at {t:.1} °C"));
+                    }
+                }
+                RuleCheck {
+                    rule: Rule::Temperature,
+                    value: Some(ta.max(tb)),
+                    limit,
+                    passed: hot.is_empty(),
+                    reason: (!hot.is_empty()).then(|| {
+                        format!(
+                            "{}, above closure {closure:.1} + {:.1} °C",
+                            hot.join(" and "),
+                            s.closure_tolerance_c
+                        )
+                    }),
+                }
+            }
+            _ if h.history.zone_temps.rows.is_empty() => RuleCheck {
+                rule: Rule::Temperature,
+                value: None,
+                limit,
+                passed: true,
+                reason: None, // no thermal model: nothing to check
+            },
+            _ => RuleCheck {
+                rule: Rule::Temperature,
+                value: None,
+                limit,
+                passed: false,
+                reason: Some("the zone's concrete is not all poured on this date".into()),
+            },
+        };
+        checks.push(temp_check);
+
+        // Age of the youngest lift.
+        let youngest = ext.and_then(|e| {
+            e.sides()
+                .iter()
+                .flat_map(|&(b, from, to)| (from..=to).map(move |l| (b, l)))
+                .map(|k| self.pour_day.get(&k).copied())
+                .collect::<Option<Vec<i64>>>()
+                .and_then(|v| v.into_iter().max())
+        });
+        let age = youngest.map(|p| day - p as f64).filter(|a| *a >= 0.0);
+        checks.push(RuleCheck {
+            rule: Rule::Age,
+            value: age,
+            limit: s.min_age_days,
+            passed: age.is_some_and(|a| a >= s.min_age_days),
+            reason: match age {
+                None => Some("a lift of the zone is not poured by this date".into()),
+                Some(a) if a < s.min_age_days => Some(format!(
+                    "the youngest lift is {a:.0} days old, {:.0} needed",
+                    s.min_age_days
+                )),
+                _ => None,
+            },
+        });
+
+        // Cover above the zone.
+        let cover = ext.map(|e| self.cover(&e, z_top, day));
+        let cover_check = match cover {
+            Some(Some((c, block))) => RuleCheck {
+                rule: Rule::Cover,
+                value: Some(c),
+                limit: s.min_cover_m,
+                passed: c >= s.min_cover_m - 1e-9,
+                reason: (c < s.min_cover_m - 1e-9).then(|| {
+                    format!(
+                        "only {c:.1} m of concrete above the zone on block {block}, {:.1} m needed",
+                        s.min_cover_m
+                    )
+                }),
+            },
+            _ => RuleCheck {
+                rule: Rule::Cover,
+                value: None,
+                limit: s.min_cover_m,
+                passed: true,
+                reason: None, // both blocks complete: waived
+            },
+        };
+        let cover_m = cover_check.value;
+        checks.push(cover_check);
+
+        // Bottom-up order.
+        checks.push(match self.zone_below(joint, zone) {
+            None => RuleCheck {
+                rule: Rule::BottomUp,
+                value: None,
+                limit: 0.0,
+                passed: true,
+                reason: None,
+            },
+            Some(below) => match grout_day.get(&(joint, below)) {
+                Some(&d) => RuleCheck {
+                    rule: Rule::BottomUp,
+                    value: Some(day - d),
+                    limit: 0.0,
+                    passed: d <= day,
+                    reason: (d > day)
+                        .then(|| format!("zone {below} below is grouted later ({})", self.date(d))),
+                },
+                None => RuleCheck {
+                    rule: Rule::BottomUp,
+                    value: None,
+                    limit: 0.0,
+                    passed: false,
+                    reason: Some(format!("zone {below} below has no grouting date")),
+                },
+            },
+        });
+
+        let groutable = checks.iter().all(|c| c.passed);
+        let verdict = match (groutable, a) {
+            (false, _) => Verdict::NotGroutable,
+            (true, Some(v)) if v < s.marginal_aperture_mm => Verdict::Marginal,
+            _ => Verdict::Groutable,
+        };
+        ZoneReadiness {
+            joint,
+            zone,
+            planned: self.date(day),
+            history: false,
+            z_bottom_m: z_bottom,
+            z_top_m: z_top,
+            apertures_mm: apertures,
+            temp_a_c: ta,
+            temp_b_c: tb,
+            closure_temp_c: closure,
+            age_days: age,
+            cover_m,
+            checks,
+            verdict,
+            reopened: h.reopened_after(joint, zone, day).map(|d| self.date(d)),
+            remedy: None,
+        }
+    }
+
+    /// The least cover over the blocks of the zone that are not complete on
+    /// `day`, with that block; None when both are complete.
+    fn cover(&self, e: &ZoneExtent, z_top: f64, day: f64) -> Option<(f64, u32)> {
+        let mut least: Option<(f64, u32)> = None;
+        for (block, ..) in e.sides() {
+            let Some(&(foundation, n_lifts)) = self.blocks.get(&block) else {
+                continue;
+            };
+            let poured = (1..=n_lifts)
+                .take_while(|&l| {
+                    self.pour_day
+                        .get(&(block, l))
+                        .is_some_and(|&d| d as f64 <= day)
+                })
+                .count() as u32;
+            if poured == n_lifts {
+                continue;
+            }
+            let top = foundation + poured as f64 * self.lift_height;
+            let c = (top - z_top).max(0.0);
+            if least.is_none_or(|l| c < l.0) {
+                least = Some((c, block));
+            }
+        }
+        least
+    }
+}

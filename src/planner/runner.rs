@@ -1,0 +1,105 @@
+//! Simulations for the planner: the baseline run keeps checkpoints, and every
+//! re-simulation of an edited schedule restarts from the latest checkpoint on
+//! or before the first date the edit changes.
+
+use std::time::Instant;
+
+use chrono::NaiveDate;
+
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::schedule::Schedules;
+use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation};
+
+use super::edit::first_change;
+
+/// The baseline run's restart points and histories.
+pub struct Runner<'a> {
+    pub scene: &'a Scene,
+    pub mesh: &'a Mesh,
+    /// the schedules of the baseline run
+    pub base: Schedules,
+    /// checkpoints of the baseline, by day
+    pub checkpoints: Vec<Checkpoint>,
+    pub history: History,
+    pub resimulations: usize,
+    pub resimulation_seconds: f64,
+}
+
+/// What one run should cover.
+#[derive(Debug, Clone, Default)]
+pub struct Span {
+    /// stop at the start of this day (its events applied and recorded)
+    pub end_day: i64,
+    /// whole days that must be step ends (recorded rows)
+    pub observe: Vec<i64>,
+}
+
+impl<'a> Runner<'a> {
+    /// Runs the baseline from scratch, or from `restart` (a checkpoint and
+    /// the history before it) when given.
+    pub fn baseline(
+        scene: &'a Scene,
+        mesh: &'a Mesh,
+        schedules: &Schedules,
+        span: &Span,
+        restart: Option<(Checkpoint, History)>,
+        every: f64,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<(Runner<'a>, RunStats), SimError> {
+        let mut sim = Simulation::new(scene, mesh, schedules)?;
+        sim.set_end_day(span.end_day);
+        sim.observe_days(&span.observe);
+        sim.checkpoint_every = Some(every);
+        if let Some((ck, history)) = &restart {
+            sim.restore(ck, history);
+        }
+        let stats = sim.run(None, progress)?;
+        let runner = Runner {
+            scene,
+            mesh,
+            base: schedules.clone(),
+            checkpoints: std::mem::take(&mut sim.checkpoints),
+            history: sim.history(),
+            resimulations: 0,
+            resimulation_seconds: 0.0,
+        };
+        Ok((runner, stats))
+    }
+
+    /// Simulates `schedules` over `span`, restarting from the latest baseline
+    /// checkpoint on or before the first date they differ from the baseline.
+    pub fn simulate(&mut self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
+        let t = Instant::now();
+        let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
+        sim.set_end_day(span.end_day);
+        let from = first_change(&self.base, schedules).map(|d| self.day_of(d));
+        // Observed days before the restart are recorded by the baseline already.
+        let start = from.map_or(f64::INFINITY, |f| f);
+        let restart = self
+            .checkpoints
+            .iter()
+            .rev()
+            .find(|c| c.day <= start)
+            .cloned();
+        let restart_day = restart.as_ref().map_or(0.0, |c| c.day);
+        let observe: Vec<i64> = span
+            .observe
+            .iter()
+            .copied()
+            .filter(|&d| d as f64 >= restart_day)
+            .collect();
+        sim.observe_days(&observe);
+        if let Some(ck) = &restart {
+            sim.restore(ck, &self.history);
+        }
+        sim.run(None, &mut |_, _| {})?;
+        self.resimulations += 1;
+        self.resimulation_seconds += t.elapsed().as_secs_f64();
+        Ok(sim.history())
+    }
+
+    pub fn day_of(&self, date: NaiveDate) -> f64 {
+        (date - self.scene.epoch).num_days() as f64
+    }
+}

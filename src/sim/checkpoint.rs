@@ -1,0 +1,202 @@
+//! Restart points of a staged run.
+//!
+//! A [`Checkpoint`] is the simulation state at the start of a whole day,
+//! before that day's events: the thermal state with its stages and pour days,
+//! the mechanical state (stresses, creep history, joint states), the step
+//! ladder and the counters. The histories recorded before that day travel
+//! separately as a [`History`]. A run restored from a checkpoint with the same
+//! schedules repeats the uninterrupted run exactly: the live systems are
+//! renumbered and refactorised from the same data, and the steps land on the
+//! same days. With edited schedules it is exact as long as every edit is on or
+//! after the checkpoint's day ([`crate::planner::restart`] picks it).
+//!
+//! On disk both are postcard (compact binary serde) files.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::{JointRecords, Simulation, ZoneRecords, ZoneTemps};
+use crate::mechanics::MechState;
+use crate::thermal::ThermalCheckpoint;
+
+use super::timeline::Ladder;
+
+/// The state of a run at the start of `day`, before its events.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub day: f64,
+    ladder: Ladder,
+    pours_done: usize,
+    steps: usize,
+    mech_steps: usize,
+    pub thermal: Option<ThermalCheckpoint>,
+    pub mechanics: Option<MechState>,
+}
+
+/// The histories a run records ([`Simulation::records`] and friends).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct History {
+    pub records: ZoneRecords,
+    pub joint_records: JointRecords,
+    pub zone_temps: ZoneTemps,
+}
+
+impl History {
+    /// The rows recorded before `day`.
+    pub fn before(&self, day: f64) -> History {
+        let mut h = self.clone();
+        h.records.rows.retain(|r| r.0 < day);
+        h.joint_records.rows.retain(|r| r.0 < day);
+        h.zone_temps.rows.retain(|r| r.0 < day);
+        h
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: not a checkpoint of this version of groutready ({source})")]
+    Decode {
+        path: String,
+        source: postcard::Error,
+    },
+    #[error("encoding {what}: {source}")]
+    Encode {
+        what: &'static str,
+        source: postcard::Error,
+    },
+}
+
+/// Writes any serde value as postcard.
+pub fn write_file<T: Serialize>(
+    path: &Path,
+    value: &T,
+    what: &'static str,
+) -> Result<(), CheckpointError> {
+    let bytes =
+        postcard::to_stdvec(value).map_err(|source| CheckpointError::Encode { what, source })?;
+    std::fs::write(path, bytes).map_err(|source| CheckpointError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// Reads a postcard file written by [`write_file`].
+pub fn read_file<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, CheckpointError> {
+    let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    postcard::from_bytes(&bytes).map_err(|source| CheckpointError::Decode {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+impl Simulation<'_> {
+    /// The state now; valid at the start of a whole day, before its events
+    /// (where [`Simulation::run`] takes its checkpoints).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            day: self.day,
+            ladder: self.ladder,
+            pours_done: self.pours_done,
+            steps: self.steps,
+            mech_steps: self.mech_steps,
+            thermal: self.thermal.as_ref().map(|t| t.checkpoint()),
+            mechanics: self.mechanics.as_ref().map(|m| m.state.clone()),
+        }
+    }
+
+    pub fn history(&self) -> History {
+        History {
+            records: self.records.clone(),
+            joint_records: self.joint_records.clone(),
+            zone_temps: self.zone_temps.clone(),
+        }
+    }
+
+    /// Continues from `ck` (taken from a run of the same scene) with this
+    /// simulation's schedules; `history` supplies the rows before its day.
+    /// Both the checkpoint and this simulation must have the same effects.
+    pub fn restore(&mut self, ck: &Checkpoint, history: &History) {
+        self.day = ck.day;
+        self.ladder = ck.ladder;
+        self.pours_done = ck.pours_done;
+        self.steps = ck.steps;
+        self.mech_steps = ck.mech_steps;
+        if let (Some(th), Some(c)) = (self.thermal.as_mut(), &ck.thermal) {
+            th.restore(c);
+        }
+        if let (Some(m), Some(c)) = (self.mechanics.as_mut(), &ck.mechanics) {
+            m.restore(c);
+        }
+        let h = history.before(ck.day);
+        self.records.rows = h.records.rows;
+        self.joint_records.rows = h.joint_records.rows;
+        self.zone_temps.rows = h.zone_temps.rows;
+        self.checkpoints.retain(|c| c.day < ck.day);
+        self.checkpoints.push(ck.clone());
+        self.events_pending = true;
+    }
+
+    pub(super) fn maybe_checkpoint(&mut self) {
+        let Some(every) = self.checkpoint_every else {
+            return;
+        };
+        let due = self.checkpoints.last().map_or(every, |c| c.day + every);
+        if self.day >= due {
+            self.checkpoints.push(self.checkpoint());
+        }
+    }
+}
+
+/// A [`super::JointSample`] on disk: its state label as text.
+#[derive(Serialize, Deserialize)]
+pub struct SampleRecord {
+    aperture: f64,
+    state: String,
+    temperature: f64,
+}
+
+const LABELS: [&str; 5] = ["open", "stick", "slip", "grouted", "reopened"];
+
+impl From<super::JointSample> for SampleRecord {
+    fn from(s: super::JointSample) -> Self {
+        SampleRecord {
+            aperture: s.aperture,
+            state: s.state.to_string(),
+            temperature: s.temperature,
+        }
+    }
+}
+
+// Written by hand: a derived impl would demand 'de: 'static for the label.
+impl<'de> Deserialize<'de> for super::JointSample {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let r = SampleRecord::deserialize(d)?;
+        super::JointSample::try_from(r).map_err(serde::de::Error::custom)
+    }
+}
+
+impl TryFrom<SampleRecord> for super::JointSample {
+    type Error = String;
+
+    fn try_from(r: SampleRecord) -> Result<Self, String> {
+        let state = LABELS
+            .iter()
+            .find(|l| **l == r.state)
+            .copied()
+            .ok_or_else(|| format!("unknown joint state {:?}", r.state))?;
+        Ok(super::JointSample {
+            aperture: r.aperture,
+            state,
+            temperature: r.temperature,
+        })
+    }
+}
