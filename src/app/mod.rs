@@ -27,6 +27,8 @@ pub enum AppError {
     NoSchedules(String),
     #[error(transparent)]
     Sim(#[from] crate::sim::SimError),
+    #[error("{0}: planning needs the `joints` effect (apertures come from the joint element); the scene simulates {1}")]
+    PlanNeedsJoints(String, String),
     #[error(transparent)]
     Checkpoint(#[from] crate::sim::checkpoint::CheckpointError),
     #[error(transparent)]

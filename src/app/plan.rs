@@ -45,6 +45,17 @@ pub fn plan(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<PlanSummary, AppError> {
     let scene = &inputs.scene;
+    if !scene.has(crate::scene::Effect::Joints) {
+        let effects: Vec<String> = scene.effects.iter().map(|e| e.to_string()).collect();
+        return Err(AppError::PlanNeedsJoints(
+            inputs.scene_path.display().to_string(),
+            if effects.is_empty() {
+                "nothing".into()
+            } else {
+                effects.join(", ")
+            },
+        ));
+    }
     let options = PlanOptions {
         as_of: request.as_of,
         horizon_days: request.horizon_days.or(scene.planner.horizon_days),

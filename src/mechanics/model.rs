@@ -11,6 +11,7 @@ use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZonePoint};
 use crate::scene::{Effect, Scene};
+use std::collections::HashMap;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
@@ -154,7 +155,8 @@ pub struct MechanicsModel {
     /// joint point of each side-a node
     point_of_a: std::collections::HashMap<u32, u32>,
     /// joint points of each (joint, zone)
-    zone_points: std::collections::HashMap<(u32, u32), Vec<u32>>,
+    /// per zone, its points inside the grout stops
+    zone_inner_points: HashMap<(u32, u32), Vec<u32>>,
     initial_gap: f64,
     grout_moduli: [f64; 3],
     grout_min_thickness: f64,
@@ -300,15 +302,7 @@ impl MechanicsModel {
                 .enumerate()
                 .map(|(i, p)| (p.a, i as u32))
                 .collect(),
-            zone_points: points.iter().enumerate().fold(
-                std::collections::HashMap::new(),
-                |mut m, (i, p)| {
-                    m.entry((p.joint, p.zone))
-                        .or_insert_with(Vec::new)
-                        .push(i as u32);
-                    m
-                },
-            ),
+            zone_inner_points: inside_grout_stops(mesh, &points),
             initial_gap: j.initial_gap_m,
             grout_moduli: [
                 j.grout_shear_modulus_pa,
@@ -788,8 +782,10 @@ impl MechanicsModel {
     }
 
     /// Smallest aperture over the points of a zone: (aperture [m], state, node a).
+    /// The smallest aperture over the zone inside its grout stops (the
+    /// zone's joint points off the dam's faces), with its label and node.
     pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<(f64, &'static str, u32)> {
-        self.zone_points
+        self.zone_inner_points
             .get(&(joint, zone))?
             .iter()
             .map(|&p| (p as usize, &self.state.joints[p as usize]))
@@ -802,4 +798,29 @@ impl MechanicsModel {
     pub fn live_dofs(&self) -> usize {
         self.sys.as_ref().map_or(0, |s| s.n)
     }
+}
+
+/// The joint points of each zone that lie inside its grout stops: off the
+/// dam's outer faces, where the grout stops that seal a zone sit. A zone with
+/// no such point (one element across) keeps all of its points.
+fn inside_grout_stops(mesh: &Mesh, points: &[JointPoint]) -> HashMap<(u32, u32), Vec<u32>> {
+    let mut on_face = vec![false; mesh.nodes.len()];
+    for f in mesh.surfaces.iter().filter(|f| f.kind != SurfaceKind::Far) {
+        let conn = &mesh.elements[f.elem as usize];
+        for &k in &crate::fem::hex8::FACES[f.face as usize] {
+            on_face[conn[k] as usize] = true;
+        }
+    }
+    let mut all: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    let mut inner: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
+    for (i, p) in points.iter().enumerate() {
+        all.entry((p.joint, p.zone)).or_default().push(i as u32);
+        if !on_face[p.a as usize] {
+            inner.entry((p.joint, p.zone)).or_default().push(i as u32);
+        }
+    }
+    for (k, v) in inner {
+        all.insert(k, v);
+    }
+    all
 }

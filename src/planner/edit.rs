@@ -1,27 +1,26 @@
 //! Schedule edits a remedy makes, and the first date two schedules differ
 //! (where a re-simulation may restart).
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 
 use chrono::NaiveDate;
 
 use crate::schedule::{CoolingStage, DamLayout, Schedules};
 
-/// Supercooling of one zone: lower the target of the cooling stage that
-/// brings its lifts (and the lifts `lifts_above` higher) to closure.
+/// Supercooling of one zone: colder water and a lower target for the cooling
+/// stage that brings its lifts (and the lifts `lifts_above` higher) to
+/// closure, from `from` (the as-of date: the past cannot be re-cooled) until
+/// the zone's grouting date.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Supercool {
     pub joint: u32,
     pub zone: u32,
     pub delta_c: f64,
-    /// the zone's grouting date: the stage edited is the last one with a
-    /// target that starts before it, and it runs until its new target or
-    /// this date
     pub planned: NaiveDate,
+    pub from: NaiveDate,
 }
 
-/// The lifts a zone's supercooling cools: (block, lift) → the zone's
-/// grouting date.
+/// The lifts a zone's supercooling cools.
 fn cooled_lifts(layout: &DamLayout, z: &Supercool, lifts_above: u32) -> Vec<(u32, u32)> {
     let Some(ext) = layout.zone(z.joint, z.zone) else {
         return Vec::new();
@@ -55,68 +54,84 @@ fn stage_to_edit(
 /// The coldest cooling water a site's chillers deliver [°C].
 pub const MIN_WATER_C: f64 = 4.0;
 
-/// Applies supercooling to `schedules`. Lifts requested by several zones take
-/// the largest ΔT. A stage row whose lifts get different ΔT is split into
-/// runs of equal ΔT. The edited rows keep cooling until their lowered target
-/// or the latest grouting date of the zones they serve (the water is lowered
-/// too where it would not stay 1 °C below the new target). Returns the
-/// zones none of whose lifts could be edited (no stage with a target).
+/// Applies supercooling to `schedules`. A stage row serving several zones
+/// takes the largest ΔT and the latest of their grouting dates; rows are
+/// edited whole (their cooled region stays what the site planned). The water
+/// is colder by ΔT (not below [`MIN_WATER_C`], and at least 1 °C below the
+/// new target) and the target lower by ΔT. The past is not re-cooled:
+/// - a stage starting on or after `from` is edited in place and runs until
+///   its new target or the grouting date;
+/// - a stage that ends (by its end date) before the grouting date is followed
+///   by an `extra` stage from its end, or from `from` if it ended earlier, to
+///   the grouting date;
+/// - a stage that started before `from` and runs past the grouting date
+///   cannot be supercooled without rewriting its past (Zhu's equivalent
+///   pipe-cooling function would restart: a colder-water step inside a
+///   running stage needs superposition, not a new row).
+///
+/// Returns the edited schedules and the zones none of whose lifts could be
+/// edited.
 pub fn supercool(
     schedules: &Schedules,
     layout: &DamLayout,
     zones: &[Supercool],
     lifts_above: u32,
 ) -> (Schedules, Vec<(u32, u32)>) {
-    // (row, lift) → (ΔT, latest grouting date)
-    let mut per_lift: HashMap<(usize, u32), (f64, NaiveDate)> = HashMap::new();
+    // row → (ΔT, latest grouting date, from)
+    let mut per_row: BTreeMap<usize, (f64, NaiveDate, NaiveDate)> = BTreeMap::new();
     let mut not_editable = Vec::new();
+    let editable = |c: &CoolingStage, from: NaiveDate, until: NaiveDate| {
+        c.start >= from || c.end.is_some_and(|e| e < until)
+    };
     for z in zones.iter().filter(|z| z.delta_c > 0.0) {
         let mut any = false;
         for (block, lift) in cooled_lifts(layout, z, lifts_above) {
-            if let Some(row) = stage_to_edit(&schedules.cooling, block, lift, z.planned) {
-                any = true;
-                let e = per_lift.entry((row, lift)).or_insert((0.0, z.planned));
-                e.0 = e.0.max(z.delta_c);
-                e.1 = e.1.max(z.planned);
+            let Some(row) = stage_to_edit(&schedules.cooling, block, lift, z.planned) else {
+                continue;
+            };
+            if !editable(&schedules.cooling[row], z.from, z.planned) {
+                continue;
             }
+            any = true;
+            let e = per_row.entry(row).or_insert((0.0, z.planned, z.from));
+            e.0 = e.0.max(z.delta_c);
+            e.1 = e.1.max(z.planned);
+            e.2 = e.2.min(z.from);
         }
         if !any {
             not_editable.push((z.joint, z.zone));
         }
     }
     let mut out = schedules.clone();
-    out.cooling.clear();
-    for (row, c) in schedules.cooling.iter().enumerate() {
-        // Runs of consecutive lifts with equal edits.
-        let mut runs: Vec<(u32, u32, Option<(f64, NaiveDate)>)> = Vec::new();
-        for lift in c.lift_from..=c.lift_to {
-            let e = per_lift.get(&(row, lift)).copied();
-            match runs.last_mut() {
-                Some(r) if r.2 == e => r.1 = lift,
-                _ => runs.push((lift, lift, e)),
-            }
-        }
-        for (from, to, e) in runs {
-            let mut s = CoolingStage {
-                lift_from: from,
-                lift_to: to,
+    let mut extra = Vec::new();
+    for (&row, &(dt, until, from)) in &per_row {
+        let c = &mut out.cooling[row];
+        let target = c.target_temp_c.unwrap_or(0.0) - dt;
+        let water = (c.water_temp_c - dt)
+            .max(MIN_WATER_C)
+            .min(target - 1.0)
+            .max(0.0);
+        if c.start >= from {
+            c.target_temp_c = Some(target);
+            c.water_temp_c = water;
+            c.end = c.end.map(|end| end.max(until));
+        } else if let Some(start) = c
+            .end
+            .filter(|&e| e < until)
+            .map(|e| e.max(from))
+            .filter(|&s| s < until)
+        {
+            extra.push(CoolingStage {
+                stage: crate::schedule::Stage::Extra,
+                start,
+                end: Some(until),
+                water_temp_c: water,
+                target_temp_c: Some(target),
                 ..c.clone()
-            };
-            if let Some((dt, until)) = e {
-                // Colder water, not only a lower target: a stage that has
-                // not reached its target by the grouting date would
-                // otherwise cool exactly as before.
-                let target = c.target_temp_c.unwrap_or(0.0) - dt;
-                s.target_temp_c = Some(target);
-                s.water_temp_c = (s.water_temp_c - dt)
-                    .max(MIN_WATER_C)
-                    .min(target - 1.0)
-                    .max(0.0);
-                s.end = s.end.map(|end| end.max(until));
-            }
-            out.cooling.push(s);
+            });
         }
     }
+    out.cooling.extend(extra);
     (out, not_editable)
 }
 

@@ -89,7 +89,7 @@ pub fn plan(
     };
     let restarted_from = restart.as_ref().map(|(c, _)| rules.date(c.day));
     let every = settings.checkpoint_days as f64;
-    let (mut runner, baseline) = Runner::baseline(
+    let (runner, baseline) = Runner::baseline(
         scene,
         mesh,
         schedules,
@@ -121,7 +121,8 @@ pub fn plan(
         .map(|z| (z.joint, z.zone))
         .collect();
     let outcome = search(
-        &mut runner,
+        &runner,
+        as_of,
         &rules,
         &layout,
         &flagged,
@@ -159,8 +160,8 @@ pub fn plan(
         stats: PlanStats {
             baseline_seconds,
             restarted_from,
-            resimulations: runner.resimulations,
-            resimulation_seconds: runner.resimulation_seconds,
+            resimulations: runner.resimulations().0,
+            resimulation_seconds: runner.resimulations().1,
             total_seconds: t0.elapsed().as_secs_f64(),
         },
     };

@@ -22,8 +22,9 @@ pub struct Runner<'a> {
     /// checkpoints of the baseline, by day
     pub checkpoints: Vec<Checkpoint>,
     pub history: History,
-    pub resimulations: usize,
-    pub resimulation_seconds: f64,
+    /// re-simulations run and their seconds (re-simulations may run on
+    /// several threads)
+    counters: std::sync::Mutex<(usize, f64)>,
 }
 
 /// What one run should cover.
@@ -61,15 +62,14 @@ impl<'a> Runner<'a> {
             base: schedules.clone(),
             checkpoints: std::mem::take(&mut sim.checkpoints),
             history: sim.history(),
-            resimulations: 0,
-            resimulation_seconds: 0.0,
+            counters: std::sync::Mutex::new((0, 0.0)),
         };
         Ok((runner, stats))
     }
 
     /// Simulates `schedules` over `span`, restarting from the latest baseline
     /// checkpoint on or before the first date they differ from the baseline.
-    pub fn simulate(&mut self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
+    pub fn simulate(&self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
         let t = Instant::now();
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
         sim.set_end_day(span.end_day);
@@ -94,9 +94,15 @@ impl<'a> Runner<'a> {
             sim.restore(ck, &self.history);
         }
         sim.run(None, &mut |_, _| {})?;
-        self.resimulations += 1;
-        self.resimulation_seconds += t.elapsed().as_secs_f64();
+        let mut c = self.counters.lock().unwrap_or_else(|e| e.into_inner());
+        c.0 += 1;
+        c.1 += t.elapsed().as_secs_f64();
         Ok(sim.history())
+    }
+
+    /// Re-simulations so far and their total seconds.
+    pub fn resimulations(&self) -> (usize, f64) {
+        *self.counters.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     pub fn day_of(&self, date: NaiveDate) -> f64 {

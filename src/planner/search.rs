@@ -24,9 +24,7 @@ use crate::schedule::{DamLayout, Schedules};
 use crate::sim::{History, SimError};
 
 use super::edit::{self, Supercool};
-use super::readiness::{
-    DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, Verdict, ZoneReadiness,
-};
+use super::readiness::{DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneReadiness};
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
 
@@ -50,7 +48,9 @@ pub fn grout_days(rules: &Rules, s: &Schedules) -> HashMap<Key, f64> {
 }
 
 struct Ctx<'x, 'r, 'a> {
-    runner: &'x mut Runner<'a>,
+    runner: &'x Runner<'a>,
+    /// remedies act from this date on
+    as_of: NaiveDate,
     rules: &'x Rules<'r>,
     layout: &'x DamLayout,
     progress: &'x mut dyn FnMut(&str),
@@ -72,7 +72,8 @@ impl Ctx<'_, '_, '_> {
 /// Searches remedies for the `flagged` zones; `to_grout` are all zones still
 /// to grout (re-checked in the final run).
 pub fn search(
-    runner: &mut Runner<'_>,
+    runner: &Runner<'_>,
+    as_of: NaiveDate,
     rules: &Rules<'_>,
     layout: &DamLayout,
     flagged: &[ZoneReadiness],
@@ -82,12 +83,32 @@ pub fn search(
     let base = runner.base.clone();
     let mut ctx = Ctx {
         runner,
+        as_of,
         rules,
         layout,
         progress,
     };
-    let supercool = supercool_search(&mut ctx, &base, flagged)?;
-    let delay = delay_search(&mut ctx, &base, flagged)?;
+    // The two searches are independent: the delay search runs beside the
+    // supercooling search (the simulations are single-threaded at this size).
+    let (supercool, delay) = std::thread::scope(|sc| {
+        let delay = sc.spawn(|| {
+            let mut quiet = |_: &str| {};
+            let mut c = Ctx {
+                runner,
+                as_of,
+                rules,
+                layout,
+                progress: &mut quiet,
+            };
+            delay_search(&mut c, &base, flagged)
+        });
+        let supercool = supercool_search(&mut ctx, &base, flagged);
+        (
+            supercool,
+            delay.join().expect("the delay search does not panic"),
+        )
+    });
+    let (supercool, delay) = (supercool?, delay?);
     let s = rules.settings;
 
     let mut remedies: HashMap<Key, Remedy> = HashMap::new();
@@ -142,72 +163,115 @@ pub fn search(
         );
     }
 
-    // All proposals together, re-simulated.
-    let cooled: Vec<Supercool> = flagged
-        .iter()
-        .filter_map(|z| {
-            let r = &remedies[&(z.joint, z.zone)];
-            (r.choice == RemedyChoice::Supercool).then(|| Supercool {
-                joint: z.joint,
-                zone: z.zone,
-                delta_c: r.supercool.as_ref().map_or(0.0, |o| o.delta_c),
-                planned: z.planned,
-            })
-        })
-        .collect();
-    let mut moves: Vec<(u32, u32, NaiveDate)> = Vec::new();
-    for z in flagged {
-        let r = &remedies[&(z.joint, z.zone)];
-        if let (RemedyChoice::Delay, Some(d)) = (r.choice, &r.delay) {
-            moves.push((z.joint, z.zone, d.date));
-            for &above in &d.also_delayed {
-                moves.push((z.joint, above, d.date));
-            }
-        }
-    }
-    if cooled.is_empty() && moves.is_empty() {
-        return Ok(Outcome {
-            remedies,
-            schedules: None,
-            newly_flagged: Vec::new(),
-        });
-    }
+    // All proposals together, re-simulated. A remedied zone that fails there
+    // (its neighbours' remedies differ from those of the search) gets one
+    // supercooling step or one week more, up to the limits, and the run is
+    // repeated (at most three rounds).
     let lifts_above = lifts_above(rules);
-    let (cooled_s, _) = edit::supercool(&base, layout, &cooled, lifts_above);
-    let remedied = edit::regrout(&cooled_s, &moves);
-    let new_days = grout_days(rules, &remedied);
-    let end = to_grout
-        .iter()
-        .filter_map(|k| new_days.get(k))
-        .fold(0.0f64, |a, &b| a.max(b)) as i64;
-    let h = ctx.run(
-        "verifying all remedies together",
-        &remedied,
-        &Span {
-            end_day: end,
-            observe: vec![],
-        },
-    )?;
-    let idx = HistoryIndex::new(&h);
-    let mut newly_flagged = Vec::new();
-    for &key in to_grout {
-        let Some(&day) = new_days.get(&key) else {
-            continue;
-        };
-        let r = rules.evaluate(&idx, key.0, key.1, day, &new_days);
-        match remedies.get_mut(&key) {
-            Some(rem) => {
-                rem.verified = Some((r.verdict, rules.deciding_aperture(&idx, key.0, key.1, day)))
+    let mut round = 0;
+    loop {
+        let cooled: Vec<Supercool> = flagged
+            .iter()
+            .filter_map(|z| {
+                let r = &remedies[&(z.joint, z.zone)];
+                (r.choice == RemedyChoice::Supercool).then(|| Supercool {
+                    joint: z.joint,
+                    zone: z.zone,
+                    delta_c: r.supercool.as_ref().map_or(0.0, |o| o.delta_c),
+                    planned: z.planned,
+                    from: as_of,
+                })
+            })
+            .collect();
+        let mut moves: Vec<(u32, u32, NaiveDate)> = Vec::new();
+        for z in flagged {
+            let r = &remedies[&(z.joint, z.zone)];
+            if let (RemedyChoice::Delay, Some(d)) = (r.choice, &r.delay) {
+                moves.push((z.joint, z.zone, d.date));
+                for &above in &d.also_delayed {
+                    moves.push((z.joint, above, d.date));
+                }
             }
-            None if !r.verdict.groutable() => newly_flagged.push(r),
-            None => {}
         }
+        if cooled.is_empty() && moves.is_empty() {
+            return Ok(Outcome {
+                remedies,
+                schedules: None,
+                newly_flagged: Vec::new(),
+            });
+        }
+        let (cooled_s, _) = edit::supercool(&base, layout, &cooled, lifts_above);
+        let remedied = edit::regrout(&cooled_s, &moves);
+        let new_days = grout_days(rules, &remedied);
+        let end = to_grout
+            .iter()
+            .filter_map(|k| new_days.get(k))
+            .fold(0.0f64, |a, &b| a.max(b)) as i64;
+        let h = ctx.run(
+            "verifying all remedies together",
+            &remedied,
+            &Span {
+                end_day: end,
+                observe: vec![],
+            },
+        )?;
+        let idx = HistoryIndex::new(&h);
+        let mut newly_flagged = Vec::new();
+        let mut failing = Vec::new();
+        for &key in to_grout {
+            let Some(&day) = new_days.get(&key) else {
+                continue;
+            };
+            let r = rules.evaluate(&idx, key.0, key.1, day, &new_days);
+            match remedies.get_mut(&key) {
+                Some(rem) => {
+                    let a = rules.deciding_aperture(&idx, key.0, key.1, day);
+                    rem.verified = Some((r.verdict, a));
+                    if rem.choice == RemedyChoice::Supercool {
+                        if let (Some(o), Some(a)) = (rem.supercool.as_mut(), a) {
+                            o.aperture_mm = a;
+                        }
+                    }
+                    if rem.choice != RemedyChoice::None && !r.verdict.groutable() {
+                        failing.push(key);
+                    }
+                }
+                None if !r.verdict.groutable() => newly_flagged.push(r),
+                None => {}
+            }
+        }
+        if failing.is_empty() || round == 2 {
+            return Ok(Outcome {
+                remedies,
+                schedules: Some(remedied),
+                newly_flagged,
+            });
+        }
+        for key in failing {
+            let rem = remedies.get_mut(&key).expect("remedied");
+            match (rem.choice, rem.supercool.as_mut(), rem.delay.as_mut()) {
+                (RemedyChoice::Supercool, Some(o), _)
+                    if o.delta_c + s.supercooling_step_c <= s.max_supercooling_c + 1e-9 =>
+                {
+                    o.delta_c += s.supercooling_step_c;
+                    rem.note = format!(
+                        "{}; raised to {:.2} °C: the zones' remedies together needed more",
+                        rem.note, o.delta_c
+                    );
+                }
+                (RemedyChoice::Delay, _, Some(d)) if d.days + 7 <= s.max_delay_days => {
+                    d.days += 7;
+                    d.date += chrono::Duration::days(7);
+                    rem.note = format!(
+                        "{}; lengthened to {} days: the zones' remedies together needed more",
+                        rem.note, d.days
+                    );
+                }
+                _ => {}
+            }
+        }
+        round += 1;
     }
-    Ok(Outcome {
-        remedies,
-        schedules: Some(remedied),
-        newly_flagged,
-    })
 }
 
 fn lifts_above(rules: &Rules) -> u32 {
@@ -216,6 +280,79 @@ fn lifts_above(rules: &Rules) -> u32 {
 
 type Found<T> = HashMap<Key, (Option<T>, String)>;
 
+/// How far a zone is from passing the rules cooling can fix, per rule
+/// (aperture in mm above the limit, temperature in °C below the limit);
+/// every entry ≥ 0 when they pass.
+fn margins(r: &ZoneReadiness) -> [f64; 2] {
+    let mut m = [f64::INFINITY; 2];
+    for c in &r.checks {
+        match (c.rule, c.value) {
+            (Rule::Aperture, Some(v)) => m[0] = v - c.limit,
+            (Rule::Aperture, None) => m[0] = f64::NEG_INFINITY,
+            (Rule::Temperature, Some(v)) => m[1] = c.limit - v,
+            _ => {}
+        }
+    }
+    m
+}
+
+/// The grid point where every margin is predicted to reach 0, by linear
+/// interpolation between a failing (`lo`) and a passing (`hi`) run; inside
+/// (lo, hi).
+fn interpolate(lo: (u32, [f64; 2]), hi: (u32, [f64; 2])) -> u32 {
+    let mut k = lo.0 as f64 + 1.0;
+    for r in 0..2 {
+        let (f0, f1) = (lo.1[r], hi.1[r]);
+        if f0 < 0.0 && f0.is_finite() && f1.is_finite() && f1 > f0 {
+            let x = lo.0 as f64 + (hi.0 - lo.0) as f64 * (-f0) / (f1 - f0);
+            k = k.max(x.ceil());
+        } else if f0 < 0.0 {
+            k = k.max(((lo.0 + hi.0) / 2) as f64);
+        }
+    }
+    (k as u32).clamp(lo.0 + 1, hi.0 - 1)
+}
+
+/// One zone's bracket: a failing and a passing grid point with their
+/// margins, and which end moved last (two moves of the same end in a row
+/// switch the next proposal to bisection, as in the Illinois method).
+struct Bracket {
+    lo: (u32, [f64; 2]),
+    hi: (u32, [f64; 2]),
+    same_side: u32,
+    last_hi: Option<bool>,
+}
+
+impl Bracket {
+    fn open(&self) -> bool {
+        self.hi.0 - self.lo.0 > 1
+    }
+
+    fn proposal(&self) -> u32 {
+        if !self.open() {
+            self.hi.0
+        } else if self.same_side >= 1 {
+            (self.lo.0 + self.hi.0) / 2
+        } else {
+            interpolate(self.lo, self.hi)
+        }
+    }
+
+    fn update(&mut self, k: u32, m: [f64; 2], passed: bool) {
+        self.same_side = if self.last_hi == Some(passed) {
+            self.same_side + 1
+        } else {
+            0
+        };
+        self.last_hi = Some(passed);
+        if passed {
+            self.hi = (k, m);
+        } else {
+            self.lo = (k, m);
+        }
+    }
+}
+
 fn supercool_search(
     ctx: &mut Ctx,
     base: &Schedules,
@@ -223,7 +360,7 @@ fn supercool_search(
 ) -> Result<Found<SupercoolOption>, SimError> {
     let s = ctx.rules.settings;
     let mut out: Found<SupercoolOption> = HashMap::new();
-    let k_max = (s.max_supercooling_c / s.supercooling_step_c).floor() as u32;
+    let k_max = (s.max_supercooling_c / s.supercooling_step_c + 1e-9).floor() as u32;
     let mut cands: Vec<&ZoneReadiness> = Vec::new();
     for z in flagged {
         let blocking: Vec<&str> = z
@@ -254,6 +391,7 @@ fn supercool_search(
     }
     let step = s.supercooling_step_c;
     let above = lifts_above(ctx.rules);
+    let from = ctx.as_of;
     let end = cands
         .iter()
         .map(|z| ctx.rules.day(z.planned))
@@ -271,6 +409,7 @@ fn supercool_search(
                     zone: z.zone,
                     delta_c: k as f64 * step,
                     planned: z.planned,
+                    from,
                 })
             })
             .collect()
@@ -290,7 +429,7 @@ fn supercool_search(
         &s_max,
         &span,
     )?;
-    let mut bracket: BTreeMap<Key, (u32, u32)> = BTreeMap::new();
+    let mut brackets: BTreeMap<Key, Bracket> = BTreeMap::new();
     for z in &cands {
         let key = (z.joint, z.zone);
         if not_editable.contains(&key) {
@@ -305,7 +444,15 @@ fn supercool_search(
         }
         let r = ctx.check(&h, &s_max, key, ctx.rules.day(z.planned));
         if r.verdict.groutable() {
-            bracket.insert(key, (0, k_max));
+            brackets.insert(
+                key,
+                Bracket {
+                    lo: (0, margins(z)),
+                    hi: (k_max, margins(&r)),
+                    same_side: 0,
+                    last_hi: None,
+                },
+            );
         } else {
             out.insert(
                 key,
@@ -320,86 +467,39 @@ fn supercool_search(
             );
         }
     }
-    // Bisection, all zones in the same runs.
-    while bracket.values().any(|&(lo, hi)| hi - lo > 1) {
-        let ks: BTreeMap<Key, u32> = bracket
-            .iter()
-            .map(|(&k, &(lo, hi))| (k, if hi - lo > 1 { (lo + hi) / 2 } else { hi }))
-            .collect();
+    // Bracketed search on the grid, all zones in the same runs.
+    while brackets.values().any(Bracket::open) {
+        let ks: BTreeMap<Key, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
         let (sched, _) = build(&ks);
         let h = ctx.run(
-            &format!("supercooling bisection, {} zones", bracket.len()),
+            &format!("supercooling search, {} zones", brackets.len()),
             &sched,
             &span,
         )?;
-        for (key, (lo, hi)) in bracket.iter_mut() {
-            if *hi - *lo <= 1 {
+        for (key, b) in brackets.iter_mut() {
+            if !b.open() {
                 continue;
             }
-            let mid = ks[key];
             let z = cands
                 .iter()
                 .find(|z| (z.joint, z.zone) == *key)
                 .expect("candidate");
-            if ctx
-                .check(&h, &sched, *key, ctx.rules.day(z.planned))
-                .verdict
-                .groutable()
-            {
-                *hi = mid;
-            } else {
-                *lo = mid;
-            }
+            let r = ctx.check(&h, &sched, *key, ctx.rules.day(z.planned));
+            b.update(ks[key], margins(&r), r.verdict.groutable());
         }
     }
-    // Together at their upper ends; a zone its neighbours' cooling no longer
-    // carries gets one step more.
-    let mut ks: BTreeMap<Key, u32> = bracket.iter().map(|(&k, &(_, hi))| (k, hi)).collect();
-    for round in 0..3 {
-        if ks.is_empty() {
-            break;
-        }
-        let (sched, _) = build(&ks);
-        let h = ctx.run("supercooling, verifying the zones together", &sched, &span)?;
-        let idx = HistoryIndex::new(&h);
-        let mut bumped = false;
-        for z in &cands {
-            let key = (z.joint, z.zone);
-            let Some(k) = ks.get(&key).copied() else {
-                continue;
-            };
-            let day = ctx.rules.day(z.planned);
-            let r = ctx.check(&h, &sched, key, day);
-            if r.verdict.groutable() {
-                let a = ctx
-                    .rules
-                    .deciding_aperture(&idx, key.0, key.1, day)
-                    .unwrap_or(f64::NAN);
-                out.insert(
-                    key,
-                    (
-                        Some(SupercoolOption {
-                            delta_c: k as f64 * step,
-                            aperture_mm: a,
-                        }),
-                        String::new(),
-                    ),
-                );
-            } else if k < k_max && round < 2 {
-                ks.insert(key, k + 1);
-                out.remove(&key);
-                bumped = true;
-            } else {
-                ks.remove(&key);
-                out.insert(
-                    key,
-                    (None, format!("supercooling together with its neighbours leaves it not groutable ({})", r.reasons())),
-                );
-            }
-        }
-        if !bumped {
-            break;
-        }
+    for (key, b) in &brackets {
+        out.insert(
+            *key,
+            (
+                Some(SupercoolOption {
+                    delta_c: b.hi.0 as f64 * step,
+                    // the deciding aperture of the run that passed
+                    aperture_mm: b.hi.1[0] + s.min_aperture_mm,
+                }),
+                String::new(),
+            ),
+        );
     }
     Ok(out)
 }
@@ -523,6 +623,5 @@ fn delay_search(
             }
         }
     }
-    let _ = Verdict::Groutable;
     Ok(out)
 }

@@ -1,0 +1,342 @@
+//! `report.md`: the report an engineer reads. Summary and rules, the flagged
+//! zones with their reasons, remedy and aperture chart, the marginal zones,
+//! the grouted zones that re-opened, the joint meters against the
+//! prediction, and a compact table of every zone still to grout.
+
+use std::fmt::Write;
+
+use super::charts::{meter_chart_file, zone_chart_file};
+use super::meters;
+use super::summary::Summary;
+use super::words::{self, mm, opt};
+use crate::planner::{Plan, Verdict, ZoneReadiness};
+
+/// A table cell: a `|` would end the cell and a newline the row.
+fn cell(s: &str) -> String {
+    s.replace('|', "\\|").replace(['\n', '\r'], " ")
+}
+
+fn row(out: &mut String, cells: &[String]) {
+    let cells: Vec<String> = cells.iter().map(|c| cell(c)).collect();
+    let _ = writeln!(out, "| {} |", cells.join(" | "));
+}
+
+fn header(out: &mut String, names: &[&str]) {
+    let _ = writeln!(out, "| {} |", names.join(" | "));
+    let _ = writeln!(out, "|{}", "---|".repeat(names.len()));
+}
+
+/// "14.8 / 13.0": the warmer block against the closure temperature.
+fn temps(z: &ZoneReadiness) -> String {
+    format!(
+        "{} / {:.1}",
+        opt(words::max_block_temp(z), |t| format!("{t:.1}")),
+        z.closure_temp_c
+    )
+}
+
+fn summary(out: &mut String, plan: &Plan) {
+    let s = Summary::of(plan);
+    let st = &plan.settings;
+    let p = &plan.stats;
+    let _ = writeln!(out, "## Summary\n");
+    let _ = writeln!(
+        out,
+        "- **{}** zones to grout: **{}** flagged (not groutable), **{}** marginal, {} groutable",
+        s.to_grout,
+        s.flagged,
+        s.marginal,
+        s.to_grout - s.flagged - s.marginal
+    );
+    let _ = writeln!(
+        out,
+        "- **{}** {} grouted before {}, **{}** of them re-opened",
+        s.history,
+        if s.history == 1 { "zone" } else { "zones" },
+        plan.as_of,
+        s.reopened
+    );
+    let _ = writeln!(
+        out,
+        "- Rules: aperture ≥ {} mm at the {} point (marginal below {} mm); both blocks ≤ closure + {} °C; \
+         youngest lift ≥ {} days old; ≥ {} m of concrete above; the zone below grouted first",
+        st.min_aperture_mm,
+        st.aperture_point.as_str(),
+        st.marginal_aperture_mm,
+        st.closure_tolerance_c,
+        st.min_age_days,
+        st.min_cover_m
+    );
+    let from = match p.restarted_from {
+        Some(d) => format!("restarted from the checkpoint of {d}"),
+        None => "from scratch".into(),
+    };
+    let _ = writeln!(
+        out,
+        "- Computed in {:.1} s: baseline simulation {:.1} s ({from}), {} re-simulations for remedies {:.1} s\n",
+        p.total_seconds, p.baseline_seconds, p.resimulations, p.resimulation_seconds
+    );
+}
+
+fn flagged(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan.flagged().collect();
+    let _ = writeln!(out, "## Flagged zones (not groutable)\n");
+    if zones.is_empty() {
+        let _ = writeln!(
+            out,
+            "Every zone still to grout is groutable on its planned date.\n"
+        );
+        return;
+    }
+    header(
+        out,
+        &[
+            "Joint",
+            "Zone",
+            "Planned",
+            "Min aperture mm",
+            "Reasons",
+            "Remedy",
+            "Verified",
+            "Note",
+        ],
+    );
+    for z in &zones {
+        let r = z.remedy.as_ref();
+        row(
+            out,
+            &[
+                z.joint.to_string(),
+                z.zone.to_string(),
+                z.planned.to_string(),
+                opt(z.apertures_mm.min, mm),
+                z.reasons(),
+                r.map(words::remedy_short)
+                    .unwrap_or_else(|| "not searched".into()),
+                r.and_then(words::verified_words).unwrap_or_default(),
+                r.map(|r| r.note.clone()).unwrap_or_default(),
+            ],
+        );
+    }
+    out.push('\n');
+    for z in &zones {
+        let _ = writeln!(out, "### Joint {}, zone {}\n", z.joint, z.zone);
+        if plan
+            .histories
+            .iter()
+            .any(|h| h.joint == z.joint && h.zone == z.zone)
+        {
+            let _ = writeln!(
+                out,
+                "![Aperture history of joint {}, zone {}](charts/{})\n",
+                z.joint,
+                z.zone,
+                zone_chart_file(z.joint, z.zone)
+            );
+        } else {
+            let _ = writeln!(out, "No aperture history in the plan for this zone.\n");
+        }
+    }
+}
+
+fn marginal(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan
+        .to_grout()
+        .filter(|z| z.verdict == Verdict::Marginal)
+        .collect();
+    if zones.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Marginal zones\n");
+    header(
+        out,
+        &[
+            "Joint",
+            "Zone",
+            "Planned",
+            "Min aperture mm",
+            "Center mm",
+            "Tmax / closure °C",
+            "Why",
+        ],
+    );
+    for z in zones {
+        row(
+            out,
+            &[
+                z.joint.to_string(),
+                z.zone.to_string(),
+                z.planned.to_string(),
+                opt(z.apertures_mm.min, mm),
+                opt(z.apertures_mm.center, mm),
+                temps(z),
+                words::marginal_words(z, &plan.settings),
+            ],
+        );
+    }
+    out.push('\n');
+}
+
+fn reopened(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan
+        .zones
+        .iter()
+        .filter(|z| z.history && z.reopened.is_some())
+        .collect();
+    if zones.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Grouted zones that re-opened\n");
+    header(
+        out,
+        &[
+            "Joint",
+            "Zone",
+            "Grouted",
+            "Re-opened",
+            "Days after grouting",
+        ],
+    );
+    for z in zones {
+        let d = z.reopened.expect("filtered on Some");
+        row(
+            out,
+            &[
+                z.joint.to_string(),
+                z.zone.to_string(),
+                z.planned.to_string(),
+                d.to_string(),
+                (d - z.planned).num_days().to_string(),
+            ],
+        );
+    }
+    out.push('\n');
+}
+
+fn meters_section(out: &mut String, plan: &Plan) {
+    if plan.meters.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Joint meters\n");
+    let _ = writeln!(
+        out,
+        "Error = predicted − measured aperture, over the readings the simulation predicts \
+         (the zone exists on that date).\n"
+    );
+    header(
+        out,
+        &[
+            "Joint",
+            "Readings",
+            "Compared",
+            "Mean error mm",
+            "RMS error mm",
+            "Max abs error mm",
+        ],
+    );
+    let f3 = |v: f64| {
+        // A mean error that rounds to zero would print as "-0.000".
+        let s = format!("{v:.3}");
+        if s.trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+        {
+            s.trim_start_matches('-').to_string()
+        } else {
+            s
+        }
+    };
+    for e in meters::errors(&plan.meters) {
+        row(
+            out,
+            &[
+                e.joint.to_string(),
+                e.readings.to_string(),
+                e.compared.to_string(),
+                opt(e.mean_error_mm, f3),
+                opt(e.rms_error_mm, f3),
+                opt(e.max_abs_error_mm, f3),
+            ],
+        );
+    }
+    out.push('\n');
+    for s in meters::series(&plan.meters) {
+        let _ = writeln!(
+            out,
+            "### Joint {}, zone {}, {} meter\n",
+            s.joint, s.zone, s.point
+        );
+        let _ = writeln!(
+            out,
+            "![Joint {}, zone {}, {} meter: predicted and measured](charts/{})\n",
+            s.joint,
+            s.zone,
+            s.point,
+            meter_chart_file(s.joint, s.zone, s.point)
+        );
+    }
+}
+
+fn all_to_grout(out: &mut String, plan: &Plan) {
+    let _ = writeln!(out, "## All zones to grout\n");
+    header(
+        out,
+        &[
+            "Joint",
+            "Zone",
+            "Planned",
+            "Min mm",
+            "Center mm",
+            "Tmax / closure °C",
+            "Verdict",
+            "Reasons — remedy",
+        ],
+    );
+    for z in plan.to_grout() {
+        row(
+            out,
+            &[
+                z.joint.to_string(),
+                z.zone.to_string(),
+                z.planned.to_string(),
+                opt(z.apertures_mm.min, mm),
+                opt(z.apertures_mm.center, mm),
+                temps(z),
+                format!(
+                    "{} {}",
+                    words::verdict_symbol(z.verdict),
+                    words::verdict_words(z.verdict)
+                ),
+                words::zone_words(z, &plan.settings),
+            ],
+        );
+    }
+    out.push('\n');
+}
+
+/// The Markdown text; chart links are relative to the report's folder.
+pub fn render(plan: &Plan) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Grouting readiness: {}, as of {}\n",
+        plan.scene, plan.as_of
+    );
+    summary(&mut out, plan);
+    flagged(&mut out, plan);
+    marginal(&mut out, plan);
+    reopened(&mut out, plan);
+    meters_section(&mut out, plan);
+    all_to_grout(&mut out, plan);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_cannot_break_the_table() {
+        assert_eq!(cell("a | b\nc"), "a \\| b c");
+    }
+}

@@ -1,0 +1,154 @@
+//! Plain-word descriptions of verdicts, remedies and the deciding values of
+//! a zone, shared by the terminal table, the Markdown report and the CSV,
+//! so every output says the same thing the same way.
+
+use crate::planner::{
+    DecidingPoint, PlannerSettings, Remedy, RemedyChoice, Verdict, ZoneReadiness,
+};
+
+/// A symbol that reads without colour.
+pub fn verdict_symbol(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Groutable => "✓",
+        Verdict::Marginal => "~",
+        Verdict::NotGroutable => "✗",
+    }
+}
+
+/// "not groutable" rather than the snake_case of the CSV.
+pub fn verdict_words(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Groutable => "groutable",
+        Verdict::Marginal => "marginal",
+        Verdict::NotGroutable => "not groutable",
+    }
+}
+
+/// Millimetres with two decimals: a tenth of a joint meter's resolution is
+/// noise, and 0.49 vs 0.50 matters against a 0.5 mm rule.
+pub fn mm(v: f64) -> String {
+    format!("{v:.2}")
+}
+
+/// "–" for a value that could not be measured.
+pub fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    v.map(f).unwrap_or_else(|| "–".into())
+}
+
+/// The aperture the rule is decided on.
+pub fn deciding_aperture(z: &ZoneReadiness, point: DecidingPoint) -> Option<f64> {
+    let a = &z.apertures_mm;
+    match point {
+        DecidingPoint::Min => a.min,
+        DecidingPoint::Upstream => a.upstream,
+        DecidingPoint::Center => a.center,
+        DecidingPoint::Downstream => a.downstream,
+    }
+}
+
+/// The warmer of the two blocks.
+pub fn max_block_temp(z: &ZoneReadiness) -> Option<f64> {
+    match (z.temp_a_c, z.temp_b_c) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The proposed remedy in a few words: `supercool 1.25 °C → 0.62 mm`,
+/// `delay 12 d → 2024-10-03, 0.55 mm (+ zone 4)` (the zones above that move
+/// with it) or `no remedy found`.
+pub fn remedy_short(r: &Remedy) -> String {
+    match (r.choice, &r.supercool, &r.delay) {
+        (RemedyChoice::Supercool, Some(s), _) => {
+            format!("supercool {:.2} °C → {} mm", s.delta_c, mm(s.aperture_mm))
+        }
+        (RemedyChoice::Delay, _, Some(d)) => {
+            let mut s = format!("delay {} d → {}, {} mm", d.days, d.date, mm(d.aperture_mm));
+            if !d.also_delayed.is_empty() {
+                let zones: Vec<String> = d.also_delayed.iter().map(u32::to_string).collect();
+                let z = if zones.len() == 1 { "zone" } else { "zones" };
+                s.push_str(&format!(" (+ {z} {})", zones.join(", ")));
+            }
+            s
+        }
+        _ => "no remedy found".into(),
+    }
+}
+
+/// The verified outcome of the remedy: `verified groutable, 0.61 mm`.
+pub fn verified_words(r: &Remedy) -> Option<String> {
+    r.verified.map(|(v, a)| match a {
+        Some(a) => format!("verified {}, {} mm", verdict_words(v), mm(a)),
+        None => format!("verified {}", verdict_words(v)),
+    })
+}
+
+/// Why a groutable zone is only marginal.
+pub fn marginal_words(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+    match deciding_aperture(z, s.aperture_point) {
+        Some(a) => format!(
+            "aperture {} mm below {} mm",
+            mm(a),
+            mm(s.marginal_aperture_mm)
+        ),
+        None => "aperture below the marginal limit".into(),
+    }
+}
+
+/// What the terminal and the compact tables say about a zone: the failed
+/// rules and the remedy, or why it is marginal.
+pub fn zone_words(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+    match z.verdict {
+        Verdict::Groutable => String::new(),
+        Verdict::Marginal => marginal_words(z, s),
+        Verdict::NotGroutable => {
+            let reasons = z.reasons();
+            match &z.remedy {
+                Some(r) if reasons.is_empty() => remedy_short(r),
+                Some(r) => format!("{reasons} — {}", remedy_short(r)),
+                None => reasons,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planner::{DelayOption, SupercoolOption};
+
+    fn remedy(choice: RemedyChoice) -> Remedy {
+        Remedy {
+            supercool: Some(SupercoolOption {
+                delta_c: 1.25,
+                aperture_mm: 0.6234,
+            }),
+            delay: Some(DelayOption {
+                days: 12,
+                date: "2024-10-03".parse().unwrap(),
+                aperture_mm: 0.551,
+                also_delayed: vec![],
+            }),
+            choice,
+            verified: Some((Verdict::Marginal, Some(0.6))),
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn remedies_in_words() {
+        assert_eq!(
+            remedy_short(&remedy(RemedyChoice::Supercool)),
+            "supercool 1.25 °C → 0.62 mm"
+        );
+        assert_eq!(
+            remedy_short(&remedy(RemedyChoice::Delay)),
+            "delay 12 d → 2024-10-03, 0.55 mm"
+        );
+        assert_eq!(remedy_short(&remedy(RemedyChoice::None)), "no remedy found");
+        assert_eq!(
+            verified_words(&remedy(RemedyChoice::None)).unwrap(),
+            "verified marginal, 0.60 mm"
+        );
+    }
+}

@@ -1,0 +1,281 @@
+//! `groutready plan` as a site engineer runs it every week: exit codes, the
+//! run folder, the restart from its checkpoints, and bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_groutready"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), to.join(entry.file_name())).unwrap();
+    }
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut n: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    n.sort();
+    n
+}
+
+const SCENE: &str = "models/small_dam_joints.toml";
+
+/// The first zones of the small dam: grouted at the end of May 2024, when
+/// most of them are still too tight.
+fn plan(out: &Path, extra: &[&str]) -> Output {
+    bin()
+        .args([
+            "plan",
+            SCENE,
+            "--as-of",
+            "2024-05-20",
+            "--horizon-days",
+            "10",
+            "--out",
+        ])
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn readiness(out: &Path) -> Vec<Vec<String>> {
+    let mut r = csv::Reader::from_path(out.join("readiness.csv")).unwrap();
+    r.records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect()
+}
+
+#[test]
+fn plan_writes_the_run_folder_exits_3_when_flagged_and_restarts_from_checkpoints() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("plan");
+    let o = plan(&out, &["--fail-on-flag"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stdout}\n{stderr}");
+    for f in [
+        "readiness.csv",
+        "report.md",
+        "report.json",
+        "apertures.csv",
+        "restart",
+        "run.txt",
+        "charts",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing:\n{stdout}");
+    }
+    // Only the run folder: no staging folder left behind.
+    assert_eq!(names(tmp.path()), vec!["plan".to_string()]);
+    let first = readiness(&out);
+    assert!(first
+        .iter()
+        .any(|r| r.contains(&"not_groutable".to_string())));
+
+    // The same week again: restarts from the run folder, same answer.
+    let o = plan(&out, &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("restarted from"), "{stdout}");
+    assert_eq!(readiness(&out), first);
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    for args in [
+        vec!["plan", "--as-of", "2024-13-01"],
+        vec!["plan", "--horizon-days", "-3"],
+        vec!["plan", "--no-such-flag"],
+    ] {
+        let o = bin().args(&args).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+    }
+    let o = bin()
+        .args(["plan", "--as-of", "2024-13-01"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("expected a date YYYY-MM-DD, found \"2024-13-01\""),
+        "{err}"
+    );
+}
+
+/// Edits one schedule file of a copy of the small dam's schedules.
+enum Edit {
+    /// replace 1-based line `n` of `file`
+    Line(&'static str, usize, &'static str),
+    /// append a line to `file`
+    Append(&'static str, &'static str),
+    /// write `file` with this text
+    Write(&'static str, &'static str),
+    Remove(&'static str),
+}
+
+fn apply(dir: &Path, edit: &Edit) {
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+    match *edit {
+        Edit::Line(f, n, text) => {
+            let mut lines: Vec<String> = read(f).lines().map(String::from).collect();
+            lines[n - 1] = text.to_string();
+            std::fs::write(dir.join(f), lines.join("\n") + "\n").unwrap();
+        }
+        Edit::Append(f, text) => std::fs::write(dir.join(f), read(f) + text + "\n").unwrap(),
+        Edit::Write(f, text) => std::fs::write(dir.join(f), text).unwrap(),
+        Edit::Remove(f) => std::fs::remove_file(dir.join(f)).unwrap(),
+    }
+}
+
+/// Malformed or inconsistent schedules: each is refused with its exact
+/// message (file, line, column where there is one), exit code 1, and no run
+/// folder is written.
+#[test]
+fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
+    use Edit::*;
+    let cases: Vec<(Edit, &str)> = vec![
+        (
+            Line("pours.csv", 2, "3,1,31/01/2024,17.9"),
+            "pours.csv:2:3 (pour_date): expected a date YYYY-MM-DD, found \"31/01/2024\"",
+        ),
+        (
+            Line("pours.csv", 2, "3,1,2024-01-31,warm"),
+            "pours.csv:2:4 (placement_temp_c): expected a number (°C), found \"warm\"",
+        ),
+        (
+            Line("pours.csv", 7, "3,2,2024-01-30,17.7"),
+            "pours.csv:7: block 3 lift 2 poured 2024-01-30, before lift 1 (line 2) poured 2024-01-31",
+        ),
+        (Append("pours.csv", "9,1,2024-03-01,15"), "pours.csv:102: block 9 is not in the dam (blocks 1-5)"),
+        (
+            Line("cooling.csv", 2, "3,1,1,third,2024-01-31,2024-02-21,10,20"),
+            "cooling.csv:2:4 (stage): expected one of first, middle, second, extra, found \"third\"",
+        ),
+        (Line("cooling.csv", 2, "3,1,1,first,2024-01-20,2024-02-21,10,20"), "cooling.csv:2: block 3 lift 1: stage first starts 2024-01-20, before lift 1 is poured 2024-01-31 (pours.csv:2)"),
+        (Line("cooling.csv", 2, "3,1,1,first,2024-01-31,2024-02-21,10,8"), "cooling.csv:2:8 (target_temp_c): expected a target temperature above water_temp_c 10 °C, found \"8\""),
+        (Line("grouting.csv", 2, "2,1,2024-01-15"), "grouting.csv:2: joint 2 zone 1 planned 2024-01-15, before the zone exists: block 2 lift 3 is poured 2024-02-26 (pours.csv:13)"),
+        (Append("grouting.csv", "2,9,2025-06-01"), "grouting.csv:30: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)"),
+        (Append("grouting.csv", "7,1,2024-06-01"), "grouting.csv:30: joint 7 does not exist (joints 1-4)"),
+        (Append("grouting.csv", "2,1,2024-05-27"), "grouting.csv:30: duplicate row: joint 2 zone 1 is already on line 2"),
+        (Line("grouting.csv", 1, "joint,zone,planed_date"), "grouting.csv:1: expected header \"joint,zone,planned_date\", found \"joint,zone,planed_date\" (missing column \"planned_date\"; unexpected column \"planed_date\")"),
+        (
+            Write("grouting.csv", "joint,zone,planned_date,status\n2,1,2024-05-26,finished\n"),
+            "grouting.csv:2:4 (status): expected done, planned or blank, found \"finished\"",
+        ),
+        (Line("reservoir.csv", 2, "2024-09-13,high"), "reservoir.csv:2:2 (level_m): expected a number (m), found \"high\""),
+        (
+            Write("joint_meters.csv", "joint,zone,point,date,aperture_mm\n2,9,center,2024-06-01,0.6\n"),
+            "joint_meters.csv:2: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)",
+        ),
+        (
+            Write("joint_meters.csv", "joint,zone,point,date,aperture_mm\n2,1,middle,2024-06-01,0.6\n"),
+            "joint_meters.csv:2:3 (point): expected one of upstream, center, downstream, min, found \"middle\"",
+        ),
+        (Remove("pours.csv"), "pours.csv: required file not found in"),
+    ];
+    assert!(cases.len() >= 15);
+    let mut failures = Vec::new();
+    for (i, (edit, expected)) in cases.iter().enumerate() {
+        let tmp = tempfile::tempdir().unwrap();
+        let sched = tmp.path().join("sched");
+        copy_dir(&repo("schedules/small_dam"), &sched);
+        apply(&sched, edit);
+        let out = tmp.path().join("out");
+        let o = bin()
+            .args(["plan", SCENE, "--schedules"])
+            .arg(&sched)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        if o.status.code() != Some(1) || !err.contains(expected) {
+            failures.push(format!("case {i}: exit {:?}: {err}", o.status.code()));
+        }
+        assert_eq!(
+            names(tmp.path()),
+            vec!["sched".to_string()],
+            "case {i} wrote files"
+        );
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn bad_planner_settings_and_a_scene_without_joints_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo(SCENE)).unwrap().replace(
+        "../schedules/small_dam",
+        &repo("schedules/small_dam").display().to_string(),
+    );
+    let bad = format!("{text}\n[planner]\nmin_aperture_mm = -0.5\n");
+    let scene = tmp.path().join("bad.toml");
+    std::fs::write(&scene, bad).unwrap();
+    let out = tmp.path().join("out");
+    let o = bin()
+        .arg("plan")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("planner.min_aperture_mm must be > 0, got -0.5"),
+        "{err}"
+    );
+
+    let o = bin()
+        .args(["plan", "models/two_blocks.toml", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("planning needs the `joints` effect"), "{err}");
+    assert_eq!(names(tmp.path()), vec!["bad.toml".to_string()]);
+}
+
+#[test]
+fn a_failed_plan_keeps_the_previous_run_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("report.md"), "last week").unwrap();
+    let sched = tmp.path().join("sched");
+    copy_dir(&repo("schedules/small_dam"), &sched);
+    std::fs::write(
+        sched.join("grouting.csv"),
+        "joint,zone,planned_date\n2,1,someday\n",
+    )
+    .unwrap();
+    let o = bin()
+        .args(["plan", SCENE, "--schedules"])
+        .arg(&sched)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        std::fs::read_to_string(out.join("report.md")).unwrap(),
+        "last week"
+    );
+    assert_eq!(
+        names(tmp.path()),
+        vec!["out".to_string(), "sched".to_string()]
+    );
+}

@@ -1,0 +1,111 @@
+//! The README's main command on the bundled demo: `groutready plan` with no
+//! arguments flags the zones that will be too tight on their planned dates,
+//! proposes remedies, and the remedied schedules it writes make those zones
+//! groutable when they are simulated from scratch (not restarted).
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+
+use groutready::app;
+use groutready::planner::rules::{HistoryIndex, Rules};
+use groutready::schedule;
+use groutready::sim::Simulation;
+
+#[test]
+fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Exactly the README command, run from an empty folder (the demo scene
+    // is found next to the program's sources).
+    let o = Command::new(env!("CARGO_BIN_EXE_groutready"))
+        .arg("plan")
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{stderr}");
+    println!("{stdout}");
+    let out = tmp.path().join("runs/demo_arch");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let zones = report["zones"].as_array().unwrap();
+    let flagged: Vec<&serde_json::Value> = zones
+        .iter()
+        .filter(|z| z["history"] == false && z["verdict"] == "not_groutable")
+        .collect();
+    assert!(!flagged.is_empty(), "the demo must flag zones");
+    for z in &flagged {
+        let a = z["apertures_mm"]["min"].as_f64().unwrap_or(0.0);
+        let reasons: Vec<&str> = z["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|c| c["reason"].as_str())
+            .collect();
+        assert!(!reasons.is_empty());
+        assert!(a < 0.5 || !reasons.iter().any(|r| r.starts_with("aperture")));
+    }
+
+    // The remedied schedules, simulated from day 0.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let inputs = app::load_inputs(&root.join("models/demo_arch.toml"), None).unwrap();
+    let remedied = schedule::load(&out.join("remedied")).unwrap();
+    schedule::check_against(&remedied, &app::dam_layout(&inputs.mesh)).unwrap();
+    let days: HashMap<(u32, u32), f64> = remedied
+        .grouting
+        .iter()
+        .map(|g| {
+            (
+                (g.joint, g.zone),
+                (g.planned - inputs.scene.epoch).num_days() as f64,
+            )
+        })
+        .collect();
+    let mut remedied_zones = Vec::new();
+    for z in &flagged {
+        let key = (
+            z["joint"].as_u64().unwrap() as u32,
+            z["zone"].as_u64().unwrap() as u32,
+        );
+        let choice = z["remedy"]["choice"].as_str().unwrap();
+        if choice != "none" {
+            remedied_zones.push((key, choice.to_string()));
+        }
+    }
+    assert!(
+        !remedied_zones.is_empty(),
+        "some flagged zone must have a remedy"
+    );
+    let end = remedied_zones
+        .iter()
+        .map(|(k, _)| days[k])
+        .fold(0.0, f64::max) as i64;
+    let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &remedied).unwrap();
+    sim.set_end_day(end);
+    sim.run(None, &mut |_, _| {}).unwrap();
+    let layout = app::dam_layout(&inputs.mesh);
+    let rules = Rules::new(
+        &inputs.scene.planner,
+        &layout,
+        &inputs.mesh,
+        inputs.scene.epoch,
+        &remedied,
+    );
+    let history = sim.history();
+    let idx = HistoryIndex::new(&history);
+    for ((j, z), choice) in &remedied_zones {
+        let r = rules.evaluate(&idx, *j, *z, days[&(*j, *z)], &days);
+        println!(
+            "joint {j} zone {z} ({choice}): {} on {}, min aperture {:?} mm",
+            r.verdict.as_str(),
+            r.planned,
+            r.apertures_mm.min
+        );
+        assert!(
+            r.verdict.groutable(),
+            "joint {j} zone {z} after {choice}: {}",
+            r.reasons()
+        );
+    }
+}

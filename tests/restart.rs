@@ -1,0 +1,176 @@
+//! A restarted run equals an uninterrupted one (DESIGN.md §7): the small dam
+//! with every effect (thermal, pipes, creep, self-weight, joints), with the
+//! same schedules and with schedules edited after the checkpoint, in memory
+//! and through a checkpoint file.
+
+use std::path::Path;
+
+use groutready::app::{self, Inputs};
+use groutready::planner::edit;
+use groutready::schedule::Schedules;
+use groutready::sim::checkpoint::{read_file, write_file};
+use groutready::sim::{Checkpoint, History, Simulation};
+
+const END: i64 = 200;
+
+fn inputs() -> Inputs {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    app::load_inputs(&root.join("models/small_dam_joints.toml"), None).unwrap()
+}
+
+fn run(
+    inputs: &Inputs,
+    s: &Schedules,
+    restart: Option<(&Checkpoint, &History)>,
+) -> Simulation<'static> {
+    // Leaked so the simulation may outlive this helper's borrows.
+    let scene = Box::leak(Box::new(inputs.scene.clone()));
+    let mesh = Box::leak(Box::new(inputs.mesh.clone()));
+    let mut sim = Simulation::new(scene, mesh, s).unwrap();
+    sim.set_end_day(END);
+    sim.checkpoint_every = Some(30.0);
+    if let Some((ck, h)) = restart {
+        sim.restore(ck, h);
+    }
+    sim.run(None, &mut |_, _| {}).unwrap();
+    sim
+}
+
+/// Largest aperture difference relative to the widest aperture on the days
+/// both histories hold, number of such days, and the number of differing
+/// labels; and the largest temperature difference [°C].
+fn compare(a: &History, b: &History, from: f64) -> (f64, usize, usize, f64) {
+    let widest = a
+        .joint_records
+        .rows
+        .iter()
+        .flat_map(|r| r.1.iter().flatten().map(|s| s.aperture.abs()))
+        .fold(0.0, f64::max);
+    assert!(
+        widest > 1e-4,
+        "the joints must open in this test ({widest} m)"
+    );
+    let (mut diff, mut days, mut labels) = (0.0f64, 0, 0);
+    for ra in &a.joint_records.rows {
+        let Some(rb) = b.joint_records.rows.iter().find(|r| r.0 == ra.0) else {
+            continue;
+        };
+        if ra.0 < from {
+            continue;
+        }
+        days += 1;
+        for (x, y) in ra.1.iter().zip(&rb.1) {
+            match (x, y) {
+                (Some(x), Some(y)) => {
+                    diff = diff.max((x.aperture - y.aperture).abs() / widest);
+                    labels += usize::from(x.state != y.state);
+                }
+                (None, None) => {}
+                _ => labels += 1,
+            }
+        }
+    }
+    let mut dt = 0.0f64;
+    for ra in &a.records.rows {
+        let Some(rb) = b.records.rows.iter().find(|r| r.0 == ra.0) else {
+            continue;
+        };
+        for (x, y) in ra.1.iter().zip(&rb.1) {
+            if x.is_finite() || y.is_finite() {
+                dt = dt.max((x - y).abs());
+            }
+        }
+    }
+    (diff, days, labels, dt)
+}
+
+#[test]
+fn restart_with_the_same_schedules_repeats_the_run() {
+    let inputs = inputs();
+    let a = run(&inputs, &inputs.schedules, None);
+    assert!(
+        a.checkpoints.len() >= 5,
+        "{} checkpoints",
+        a.checkpoints.len()
+    );
+    let ck = a
+        .checkpoints
+        .iter()
+        .find(|c| c.day >= 90.0)
+        .unwrap()
+        .clone();
+    // Through a file, as the weekly update reads it.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ck.bin");
+    write_file(&path, &ck, "checkpoint").unwrap();
+    let back: Checkpoint = read_file(&path).unwrap();
+    // (bytes, not ==: unborn elements carry NaN birth days)
+    let bytes = |c: &Checkpoint| postcard::to_stdvec(c).unwrap();
+    assert!(bytes(&back) == bytes(&ck), "checkpoint file round trip");
+    let hpath = dir.path().join("history.bin");
+    write_file(&hpath, &a.history(), "history").unwrap();
+    let h: History = read_file(&hpath).unwrap();
+    assert!(postcard::to_stdvec(&h).unwrap() == postcard::to_stdvec(&a.history()).unwrap());
+
+    let b = run(&inputs, &inputs.schedules, Some((&back, &h)));
+    let (diff, days, labels, dt) = compare(&a.history(), &b.history(), ck.day);
+    println!("same schedules, restart at day {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
+    assert!(days > 50);
+    assert_eq!(
+        a.history().joint_records.rows.len(),
+        b.history().joint_records.rows.len()
+    );
+    assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
+    assert_eq!(labels, 0);
+    assert!(dt <= 1e-9);
+}
+
+#[test]
+fn restart_before_an_edit_equals_the_edited_run_from_scratch() {
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    // Supercool zone 3 of joint 2 by 2 °C and move the grouting of zone 2 of
+    // joint 3 ten days later: the weekly update of a site.
+    let g = inputs.schedules.grouting_of(3, 2).unwrap().planned;
+    let z = inputs.schedules.grouting_of(2, 3).unwrap().planned;
+    let layout = app::dam_layout(&inputs.mesh);
+    let (cooled, missing) = edit::supercool(
+        &inputs.schedules,
+        &layout,
+        &[edit::Supercool {
+            joint: 2,
+            zone: 3,
+            delta_c: 2.0,
+            planned: z,
+            from: inputs.scene.epoch + chrono::Duration::days(100),
+        }],
+        3,
+    );
+    assert!(missing.is_empty());
+    let edited = edit::regrout(&cooled, &[(3, 2, g + chrono::Duration::days(10))]);
+    groutready::schedule::validate(&edited).unwrap();
+    let first = edit::first_change(&inputs.schedules, &edited).unwrap();
+    let first_day = (first - inputs.scene.epoch).num_days() as f64;
+    let ck = base
+        .checkpoints
+        .iter()
+        .rev()
+        .find(|c| c.day <= first_day)
+        .expect("a checkpoint before the edit")
+        .clone();
+    assert!(ck.day > 0.0);
+
+    let scratch = run(&inputs, &edited, None);
+    let restarted = run(&inputs, &edited, Some((&ck, &base.history())));
+    let (diff, days, labels, dt) = compare(&scratch.history(), &restarted.history(), ck.day);
+    println!("edited on {first}, restart at day {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
+    assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
+    assert_eq!(labels, 0);
+    assert!(dt <= 1e-9);
+    // ...and the edit did change the run (the comparison is not vacuous).
+    let (changed, ..) = compare(&base.history(), &scratch.history(), ck.day);
+    assert!(
+        changed > 1e-3,
+        "the edit changed apertures by only {changed:e}"
+    );
+}
