@@ -71,6 +71,12 @@ enum Command {
 
 #[derive(Subcommand)]
 enum StudyCommand {
+    /// Weekly update: a plan from scratch, the same plan restarted from its
+    /// run folder, and the plan after a schedule edit, timed.
+    Restart {
+        /// Scene (default: models/demo_arch.toml).
+        scene: Option<PathBuf>,
+    },
     /// Thermal run time, steps and factorisations on the demo and the large arch.
     Perf {
         /// Scenes to time (default: models/demo_arch.toml, then the first 40
@@ -245,6 +251,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             } else {
                 0
             })
+        }
+        Command::Study {
+            what: StudyCommand::Restart { scene },
+        } => {
+            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+            groutready::study::restart::restart(&scene)?;
+            Ok(0)
         }
         Command::Study {
             what:

@@ -91,7 +91,11 @@ pub fn plan(
         &inputs.mesh,
         &inputs.schedules,
         &options,
-        previous.map(|p| (p.checkpoint, p.history)),
+        previous.map(|p| planner::plan::Restart {
+            checkpoint: p.checkpoint,
+            history: p.history,
+            older: p.older,
+        }),
         progress,
     )?;
 

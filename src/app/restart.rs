@@ -50,6 +50,8 @@ fn ck_day(name: &str) -> Option<f64> {
 /// A restart found in an earlier run folder.
 pub struct Previous {
     pub checkpoint: Checkpoint,
+    /// the folder's earlier checkpoints (remedy searches restart from them)
+    pub older: Vec<Checkpoint>,
     pub history: History,
     /// the first date the schedules differ from the earlier run's (None: same)
     pub first_change: Option<chrono::NaiveDate>,
@@ -77,15 +79,21 @@ pub fn find(
         .map(|d| (d - scene.epoch).num_days() as f64)
         .unwrap_or(f64::INFINITY)
         .min(end_day);
-    let best = list(&dir)?
+    let mut usable: Vec<(f64, PathBuf)> = list(&dir)?
         .into_iter()
         .filter(|&(d, _)| d <= limit)
-        .max_by(|a, b| a.0.total_cmp(&b.0));
-    let Some((_, path)) = best else {
+        .collect();
+    usable.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let Some((_, path)) = usable.pop() else {
         return Ok(None);
     };
+    let older = usable
+        .iter()
+        .map(|(_, p)| read_file(p))
+        .collect::<Result<_, _>>()?;
     Ok(Some(Previous {
         checkpoint: read_file(&path)?,
+        older,
         history: read_file(&dir.join(HISTORY))?,
         first_change: first,
         dir,

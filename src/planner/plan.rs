@@ -58,7 +58,7 @@ pub fn plan(
     mesh: &Mesh,
     schedules: &Schedules,
     options: &PlanOptions,
-    restart: Option<(Checkpoint, History)>,
+    restart: Option<Restart>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<PlanOutput, SimError> {
     let t0 = Instant::now();
@@ -87,9 +87,13 @@ pub fn plan(
         end_day,
         observe: vec![],
     };
-    let restarted_from = restart.as_ref().map(|(c, _)| rules.date(c.day));
+    let restarted_from = restart.as_ref().map(|r| rules.date(r.checkpoint.day));
+    let (restart, older) = match restart {
+        Some(r) => (Some((r.checkpoint, r.history)), r.older),
+        None => (None, Vec::new()),
+    };
     let every = settings.checkpoint_days as f64;
-    let (runner, baseline) = Runner::baseline(
+    let (mut runner, baseline) = Runner::baseline(
         scene,
         mesh,
         schedules,
@@ -98,6 +102,7 @@ pub fn plan(
         every,
         &mut |d, e| progress(Progress::Baseline { day: d, end: e }),
     )?;
+    runner.add_older(older);
     let baseline_seconds = t0.elapsed().as_secs_f64();
 
     let grout = grout_days(&rules, schedules);
@@ -173,6 +178,14 @@ pub fn plan(
         remedied: outcome.schedules,
         newly_flagged: outcome.newly_flagged,
     })
+}
+
+/// A restart of the baseline from an earlier run folder.
+pub struct Restart {
+    pub checkpoint: Checkpoint,
+    pub history: History,
+    /// earlier checkpoints of that run, for the remedy searches
+    pub older: Vec<Checkpoint>,
 }
 
 /// Progress of a plan, for a progress bar or a log.

@@ -100,6 +100,15 @@ impl<'a> Runner<'a> {
         Ok(sim.history())
     }
 
+    /// Adds checkpoints of an earlier run that agree with this baseline
+    /// (taken before the day it restarted from).
+    pub fn add_older(&mut self, older: Vec<Checkpoint>) {
+        let first = self.checkpoints.first().map_or(f64::INFINITY, |c| c.day);
+        self.checkpoints
+            .extend(older.into_iter().filter(|c| c.day < first));
+        self.checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+    }
+
     /// Re-simulations so far and their total seconds.
     pub fn resimulations(&self) -> (usize, f64) {
         *self.counters.lock().unwrap_or_else(|e| e.into_inner())

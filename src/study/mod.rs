@@ -1,6 +1,8 @@
 //! Benchmarks and studies: what accuracy costs in time. Figures are printed,
 //! never asserted.
 
+pub mod restart;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -1,0 +1,82 @@
+//! What a weekly update saves: the plan from scratch, the same plan again
+//! (restarted from its own run folder), and the plan after a schedule edit
+//! (one zone's grouting moved a week later), each timed.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::app::{self, plan::PlanRequest};
+
+/// Prints the three timings and the largest aperture difference between the
+/// restarted and the from-scratch plan of the edited schedules.
+pub fn restart(scene: &Path) -> anyhow::Result<()> {
+    let mut inputs = app::load_inputs(scene, None)?;
+    let tmp = tempfile_dir()?;
+    let out = tmp.join("plan");
+    let quiet = &mut |_| {};
+    let time = |inputs: &app::Inputs,
+                req: &PlanRequest,
+                out: &Path,
+                quiet: &mut dyn FnMut(crate::planner::Progress)|
+     -> anyhow::Result<(f64, crate::planner::Plan)> {
+        let t = Instant::now();
+        let s = app::plan::plan(inputs, out, req, quiet)?;
+        Ok((t.elapsed().as_secs_f64(), s.plan))
+    };
+    let scratch = PlanRequest {
+        from_scratch: true,
+        ..Default::default()
+    };
+    let (t0, p0) = time(&inputs, &scratch, &out, quiet)?;
+    println!(
+        "{}: plan from scratch {t0:.1} s (baseline {:.1} s, {} re-simulations {:.1} s)",
+        inputs.scene.name,
+        p0.stats.baseline_seconds,
+        p0.stats.resimulations,
+        p0.stats.resimulation_seconds
+    );
+    let (t1, p1) = time(&inputs, &PlanRequest::default(), &out, quiet)?;
+    println!(
+        "same schedules again: {t1:.1} s (baseline {:.1} s, restarted from {})",
+        p1.stats.baseline_seconds,
+        p1.stats
+            .restarted_from
+            .map(|d| d.to_string())
+            .unwrap_or_else(|| "day 0".into())
+    );
+    // The weekly edit: the last zone to grout moves a week later.
+    let Some(last) = p0.to_grout().map(|z| (z.planned, z.joint, z.zone)).max() else {
+        println!("no zone to grout: nothing to edit");
+        return Ok(());
+    };
+    for g in inputs.schedules.grouting.iter_mut() {
+        if (g.joint, g.zone) == (last.1, last.2) {
+            g.planned += chrono::Duration::days(7);
+        }
+    }
+    let (t2, p2) = time(&inputs, &PlanRequest::default(), &out, quiet)?;
+    let (t3, p3) = time(&inputs, &scratch, &tmp.join("scratch"), quiet)?;
+    let mut diff = 0.0f64;
+    for (a, b) in p2.zones.iter().zip(&p3.zones) {
+        if let (Some(x), Some(y)) = (a.apertures_mm.min, b.apertures_mm.min) {
+            diff = diff.max((x - y).abs() / x.abs().max(1e-9));
+        }
+    }
+    println!(
+        "joint {} zone {} moved to {}: restarted {t2:.1} s (baseline {:.1} s from {}) vs from scratch {t3:.1} s (baseline {:.1} s); largest relative difference of a zone's min aperture {diff:.1e}",
+        last.1,
+        last.2,
+        last.0 + chrono::Duration::days(7),
+        p2.stats.baseline_seconds,
+        p2.stats.restarted_from.map(|d| d.to_string()).unwrap_or_else(|| "day 0".into()),
+        p3.stats.baseline_seconds
+    );
+    let _ = std::fs::remove_dir_all(&tmp);
+    Ok(())
+}
+
+fn tempfile_dir() -> anyhow::Result<std::path::PathBuf> {
+    let d = std::env::temp_dir().join(format!("groutready-study-{}", std::process::id()));
+    std::fs::create_dir_all(&d)?;
+    Ok(d)
+}
