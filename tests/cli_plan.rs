@@ -63,7 +63,16 @@ fn readiness(out: &Path) -> Vec<Vec<String>> {
 fn plan_writes_the_run_folder_exits_3_when_flagged_and_restarts_from_checkpoints() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("plan");
-    let o = plan(&out, &["--fail-on-flag"]);
+    // The site's joint meters on joint 2, zone 1.
+    let sched = tmp.path().join("sched");
+    copy_dir(&repo("schedules/small_dam"), &sched);
+    std::fs::write(
+        sched.join("joint_meters.csv"),
+        "joint,zone,point,date,aperture_mm\n2,1,center,2024-04-01,0.20\n2,1,center,2024-05-01,0.35\n2,1,min,2024-05-15,0.10\n",
+    )
+    .unwrap();
+    let sched_arg = sched.display().to_string();
+    let o = plan(&out, &["--fail-on-flag", "--schedules", &sched_arg]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{stdout}\n{stderr}");
@@ -79,14 +88,39 @@ fn plan_writes_the_run_folder_exits_3_when_flagged_and_restarts_from_checkpoints
         assert!(out.join(f).exists(), "{f} missing:\n{stdout}");
     }
     // Only the run folder: no staging folder left behind.
-    assert_eq!(names(tmp.path()), vec!["plan".to_string()]);
+    assert_eq!(
+        names(tmp.path()),
+        vec!["plan".to_string(), "sched".to_string()]
+    );
+    // Meters against the prediction: per-joint errors in report.md agree
+    // with the predictions in report.json, and a chart per meter.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let meters = json["meters"].as_array().unwrap();
+    assert_eq!(meters.len(), 3);
+    let errors: Vec<f64> = meters
+        .iter()
+        .map(|m| {
+            m["predicted_mm"].as_f64().expect("predicted") - m["measured_mm"].as_f64().unwrap()
+        })
+        .collect();
+    let mean = errors.iter().sum::<f64>() / 3.0;
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## Joint meters"), "{md}");
+    assert!(
+        md.contains(&format!("| 2 | 3 | 3 | {mean:.3} |")),
+        "mean error {mean:.3}:\n{md}"
+    );
+    for f in ["meter_J2_Z1_center.svg", "meter_J2_Z1_min.svg"] {
+        assert!(out.join("charts").join(f).exists(), "{f}");
+    }
     let first = readiness(&out);
     assert!(first
         .iter()
         .any(|r| r.contains(&"not_groutable".to_string())));
 
     // The same week again: restarts from the run folder, same answer.
-    let o = plan(&out, &[]);
+    let o = plan(&out, &["--schedules", &sched_arg]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{stdout}");
     assert!(stdout.contains("restarted from"), "{stdout}");
