@@ -1,0 +1,152 @@
+//! Supercooling remedies end to end on the small dam: planned from 1 June
+//! 2024, the zones of mid-September on the edge joints are too warm; the plan
+//! proposes supercooling their second-stage cooling (which starts after the
+//! as-of date). The remedied schedules, simulated from scratch, make those
+//! zones groutable, and one grid step less supercooling does not: the
+//! remedy is the least on the grid.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+
+use groutready::app;
+use groutready::planner::edit::{self, Supercool};
+use groutready::planner::rules::{HistoryIndex, Rules};
+use groutready::schedule::{self, Schedules};
+use groutready::sim::Simulation;
+
+fn days(inputs: &app::Inputs, s: &Schedules) -> HashMap<(u32, u32), f64> {
+    s.grouting
+        .iter()
+        .map(|g| {
+            (
+                (g.joint, g.zone),
+                (g.planned - inputs.scene.epoch).num_days() as f64,
+            )
+        })
+        .collect()
+}
+
+/// Simulates `s` from scratch to `end` and checks (joint, zone) on its date.
+fn groutable(inputs: &app::Inputs, s: &Schedules, key: (u32, u32), end: i64) -> (bool, String) {
+    let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, s).unwrap();
+    sim.set_end_day(end);
+    sim.run(None, &mut |_, _| {}).unwrap();
+    let layout = app::dam_layout(&inputs.mesh);
+    let rules = Rules::new(
+        &inputs.scene.planner,
+        &layout,
+        &inputs.mesh,
+        inputs.scene.epoch,
+        s,
+    );
+    let h = sim.history();
+    let d = days(inputs, s);
+    let r = rules.evaluate(&HistoryIndex::new(&h), key.0, key.1, d[&key], &d);
+    (
+        r.verdict.groutable(),
+        format!(
+            "{} {:?} {}",
+            r.verdict.as_str(),
+            r.apertures_mm.min,
+            r.reasons()
+        ),
+    )
+}
+
+#[test]
+fn supercooling_found_by_the_plan_is_the_least_that_works_from_scratch() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("plan");
+    let o = Command::new(env!("CARGO_BIN_EXE_groutready"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "plan",
+            "models/small_dam_joints.toml",
+            "--as-of",
+            "2024-06-01",
+            "--horizon-days",
+            "105",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    println!("{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let cooled: Vec<((u32, u32), f64)> = json["zones"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|z| z["remedy"]["choice"] == "supercool")
+        .map(|z| {
+            let key = (
+                z["joint"].as_u64().unwrap() as u32,
+                z["zone"].as_u64().unwrap() as u32,
+            );
+            (key, z["remedy"]["supercool"]["delta_c"].as_f64().unwrap())
+        })
+        .collect();
+    assert!(
+        !cooled.is_empty(),
+        "the plan must propose supercooling:\n{stdout}"
+    );
+
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let inputs = app::load_inputs(&root.join("models/small_dam_joints.toml"), None).unwrap();
+    let remedied = schedule::load(&out.join("remedied")).unwrap();
+    schedule::check_against(&remedied, &app::dam_layout(&inputs.mesh)).unwrap();
+    let d = days(&inputs, &remedied);
+    let end = cooled.iter().map(|(k, _)| d[k]).fold(0.0, f64::max) as i64;
+    for &(key, dt) in &cooled {
+        let (ok, why) = groutable(&inputs, &remedied, key, end);
+        println!("joint {} zone {} with {dt} °C: {why}", key.0, key.1);
+        assert!(ok, "joint {} zone {} with {dt} °C: {why}", key.0, key.1);
+    }
+
+    // One step less on the first zone (the others as proposed) is not enough.
+    let step = inputs.scene.planner.supercooling_step_c;
+    let (key, dt) = cooled[0];
+    let as_of = chrono::NaiveDate::from_ymd_opt(2024, 6, 1).unwrap();
+    let planned = |k: (u32, u32)| inputs.schedules.grouting_of(k.0, k.1).unwrap().planned;
+    let less: Vec<Supercool> = cooled
+        .iter()
+        .map(|&(k, t)| Supercool {
+            joint: k.0,
+            zone: k.1,
+            delta_c: if k == key { t - step } else { t },
+            planned: planned(k),
+            from: as_of,
+        })
+        .collect();
+    let above =
+        (inputs.scene.planner.supercool_above_m / inputs.scene.lifts.height_m).round() as u32;
+    let (fewer, _) = edit::supercool(
+        &inputs.schedules,
+        &app::dam_layout(&inputs.mesh),
+        &less,
+        above,
+    );
+    let (ok, why) = groutable(&inputs, &fewer, key, end);
+    println!(
+        "joint {} zone {} with {} °C: {why}",
+        key.0,
+        key.1,
+        dt - step
+    );
+    assert!(
+        !ok,
+        "{} °C would do for joint {} zone {}: {why}",
+        dt - step,
+        key.0,
+        key.1
+    );
+}
