@@ -1,7 +1,6 @@
 //! One plan: the baseline run to the last zone due, the rules on every zone,
 //! the remedy search on the flagged ones, and the data the reports need.
 
-use std::collections::HashMap;
 use std::time::Instant;
 
 use chrono::NaiveDate;
@@ -285,17 +284,4 @@ fn meter_comparisons(
         (a.joint, a.zone, &a.point, a.date).cmp(&(b.joint, b.zone, &b.point, b.date))
     });
     out
-}
-
-/// Grouting dates by zone, for callers that re-check a remedied schedule.
-pub fn grouting_days(scene: &Scene, s: &Schedules) -> HashMap<(u32, u32), f64> {
-    s.grouting
-        .iter()
-        .map(|g| {
-            (
-                (g.joint, g.zone),
-                (g.planned - scene.epoch).num_days() as f64,
-            )
-        })
-        .collect()
 }
