@@ -13,7 +13,7 @@
 //! Both contact solvers (active set and the condensed cone program) run the
 //! grouting cases.
 
-mod common;
+use crate::common;
 
 use common::*;
 use groutready::mechanics::joints::PointState;

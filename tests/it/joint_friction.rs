@@ -32,7 +32,7 @@
 //!   active set's slip direction over many sliding steps (now the stick
 //!   trial's direction each step, not the last step's slip).
 
-mod common;
+use crate::common;
 
 use std::collections::HashSet;
 

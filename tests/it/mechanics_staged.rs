@@ -1,6 +1,6 @@
 //! Staged mechanics against closed forms.
 
-mod common;
+use crate::common;
 
 use common::*;
 use groutready::material::AdiabaticRise;

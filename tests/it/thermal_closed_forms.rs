@@ -1,6 +1,6 @@
 //! Thermal engine against closed forms (DESIGN.md §7).
 
-mod common;
+use crate::common;
 
 use common::*;
 use groutready::material::{hydration_under_cooling, AdiabaticRise, ZhuPipe};

@@ -2,7 +2,7 @@
 //! through the full path: hex8 mechanics, joint contact points, condensed
 //! contact solve.
 
-mod common;
+use crate::common;
 
 use common::*;
 use groutready::mechanics::joints::PointState;

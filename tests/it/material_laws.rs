@@ -5,7 +5,7 @@
 // References are quoted at the precision they were computed with.
 #![allow(clippy::excessive_precision)]
 
-mod common;
+use crate::common;
 
 use common::{assert_rel, rel};
 

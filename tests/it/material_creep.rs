@@ -8,7 +8,7 @@
 // Index loops read best where several arrays share the index.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::{assert_rel, rel};
 

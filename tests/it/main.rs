@@ -1,0 +1,26 @@
+//! Every integration test in one binary: one link of the crate and its
+//! dependencies instead of one per file (the build time of CI).
+
+mod common;
+
+mod cli_plan;
+mod cli_run;
+mod contact_qp;
+mod contact_solvers_agree;
+mod demo_plan;
+mod fem_elasticity;
+mod fem_elements;
+mod fem_sparse;
+mod joint_friction;
+mod joint_grouting;
+mod joint_two_blocks;
+mod material_creep;
+mod material_laws;
+mod mechanics_staged;
+mod mesh_generators;
+mod planner_supercool;
+mod report_files;
+mod restart;
+mod scene_errors;
+mod schedule_errors;
+mod thermal_closed_forms;
