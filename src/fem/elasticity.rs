@@ -43,7 +43,7 @@
 //!   in D, so a driver with an ageing modulus E(τ) per element can cache
 //!   K_Q = stiffness(g, Q) once and assemble E(τ)·K_Q.
 //!
-//! # How it is verified (`tests/fem_elasticity.rs`)
+//! # How it is verified (`tests/it/fem_elasticity.rs`)
 //!
 //! * MacNeal–Harder 7-element patch test (distorted interior nodes, linear
 //!   boundary displacements, sparse assembly + Dirichlet + Cholesky): interior

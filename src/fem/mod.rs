@@ -13,7 +13,7 @@
 //! assembly, Dirichlet) → [`ordering`] (AMD or geometric nested dissection)
 //! → [`solver`] (Cholesky, counters, residual).
 //!
-//! How it is verified (`tests/fem_elements.rs`, `tests/fem_sparse.rs`):
+//! How it is verified (`tests/it/fem_elements.rs`, `tests/it/fem_sparse.rs`):
 //! Gauss rules against closed forms and polynomial exactness; hex8 partition
 //! of unity, Kronecker property, gradients against central differences, exact
 //! volumes of parallelepipeds, inverted elements rejected; conductivity

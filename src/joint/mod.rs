@@ -57,7 +57,7 @@
 //! [`ContactSettings::kkt_tolerance`]; the residual is returned in the
 //! solution (the solver calls the same check before returning). Relative
 //! means: displacements over max|b|, forces over max|b|/mean(diag W).
-//! `tests/contact_qp.rs` holds the closed forms: a single point (open, closed,
+//! `tests/it/contact_qp.rs` holds the closed forms: a single point (open, closed,
 //! tied); two bars between walls (aperture g0 − αΔT·L when cooled,
 //! σ = −E(αΔT·L − g0)/L when heated past closure, from W = C K⁻¹ Cᵀ of a spring
 //! chain); a sliding block at μ = 0, μ_s/μ_k = 0.4/0.3 and 5/4 (stick with

@@ -10,7 +10,7 @@
 //!
 //! θ is evaluated through `expm1` so that the small increments
 //! θ(τ_{n+1}) − θ(τ_n) the thermal step adds keep their relative precision
-//! at early age. Verified in `tests/material_laws.rs` against the closed
+//! at early age. Verified in `tests/it/material_laws.rs` against the closed
 //! forms and (for θ′) against central differences of θ.
 
 // `!(x > 0.0)` is the comparison that also rejects NaN.

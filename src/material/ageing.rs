@@ -52,7 +52,7 @@
 //! on the normal block and 1/(2(1+ν)) on the shear diagonal. The creep
 //! strain uses the same Q⁻¹ (a creep Poisson ratio equal to the elastic one).
 //!
-//! Verified in `tests/material_creep.rs`: E(Δτ/2) > 0 for newborn steps,
+//! Verified in `tests/it/material_creep.rs`: E(Δτ/2) > 0 for newborn steps,
 //! monotone ageing, exact telescoping of G, Q Q⁻¹ = I, and exact `validate`
 //! messages.
 

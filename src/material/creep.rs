@@ -68,7 +68,7 @@
 //! cost one order of accuracy. A zero-length step at age 0 is rejected (see
 //! [`super::ageing::mid_step_age`]).
 //!
-//! # Verification (`tests/material_creep.rs`)
+//! # Verification (`tests/it/material_creep.rs`)
 //!
 //! * Relaxation of a non-ageing material (DESIGN §7):
 //!   σ/ε0 = E/(1+φ)\[1 + φ e^{−(1+φ) r t}\]; the error at t = 1 d and 5 d falls

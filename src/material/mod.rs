@@ -11,7 +11,7 @@
 //!   hydration heat kept while pipes run.
 //!
 //! Equations, the pipe-material correction and how each piece is verified
-//! are in the submodule docs; the checks live in `tests/material_laws.rs`.
+//! are in the submodule docs; the checks live in `tests/it/material_laws.rs`.
 
 pub mod adiabatic;
 pub mod ageing;

@@ -83,7 +83,7 @@
 //! Typical cost 2–8 µs per call (≈ 50–250 integrand evaluations); corners
 //! where H < 1e−100 °C take up to ~35 µs.
 //!
-//! Verified in `tests/material_laws.rs`: against the closed form
+//! Verified in `tests/it/material_laws.rs`: against the closed form
 //! θ0 m e^{−mτ_k}(e^{−pt} − e^{−mt})/(m − p) for s = 1 (≤ 1e-12 asserted),
 //! against 24 mpmath references at 40 digits (≤ 1e-12 asserted), and against
 //! an independent brute-force quadrature on 576 combinations of form, s in

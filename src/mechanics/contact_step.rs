@@ -37,9 +37,9 @@
 //!   by supports are left out). Dense in the pairs: for checks and small
 //!   scenes.
 //!
-//! Verified by `tests/joint_two_blocks.rs`, `tests/joint_grouting.rs`,
-//! `tests/joint_friction.rs` (closed forms, both solvers) and
-//! `tests/contact_solvers_agree.rs` (the two solvers on a staged dam).
+//! Verified by `tests/it/joint_two_blocks.rs`, `tests/it/joint_grouting.rs`,
+//! `tests/it/joint_friction.rs` (closed forms, both solvers) and
+//! `tests/it/contact_solvers_agree.rs` (the two solvers on a staged dam).
 
 use std::time::Instant;
 

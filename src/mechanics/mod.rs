@@ -24,11 +24,11 @@
 //! before the zone is grouted, a bonded grout layer after, a contact again
 //! once the layer cracks.
 //!
-//! Verified by `tests/mechanics_staged.rs` (stress-free birth, restrained
+//! Verified by `tests/it/mechanics_staged.rs` (stress-free birth, restrained
 //! thermal stress in the staged driver, relaxation, equilibrium of the
 //! accumulated stresses with the accumulated loads) on top of the element
 //! tests of `fem::elasticity` and the material tests of `material::creep`;
-//! the joints by `tests/joint_two_blocks.rs` and `tests/joint_friction.rs`.
+//! the joints by `tests/it/joint_two_blocks.rs` and `tests/it/joint_friction.rs`.
 
 pub mod contact_step;
 pub mod joints;

@@ -14,11 +14,11 @@
 //! - [`plan`]: all of it for one scene and schedules, into a [`Plan`]
 //!   ([`readiness`]) that the reports and the TUI read.
 //!
-//! Verified by: `tests/restart.rs` (a restarted run equals an uninterrupted
-//! one, also after schedule edits, to 1e-15 relative), `tests/planner_supercool.rs`
+//! Verified by: `tests/it/restart.rs` (a restarted run equals an uninterrupted
+//! one, also after schedule edits, to 1e-15 relative), `tests/it/planner_supercool.rs`
 //! (the supercooling found is the least on the grid that makes the zone
 //! groutable when the remedied schedules are simulated from scratch),
-//! `tests/demo_plan.rs` (the same for the demo's delays), `tests/cli_plan.rs`
+//! `tests/it/demo_plan.rs` (the same for the demo's delays), `tests/it/cli_plan.rs`
 //! (exit codes, atomic run folders, weekly restart, joint meters, bad input).
 
 pub mod edit;

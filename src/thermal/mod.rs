@@ -18,7 +18,7 @@
 //! temperature; dofs already live keep theirs. The linear system is that of
 //! the live elements only ([`live`]).
 //!
-//! Verified by `tests/thermal_closed_forms.rs`: adiabatic curves, Zhu's T̄
+//! Verified by `tests/it/thermal_closed_forms.rs`: adiabatic curves, Zhu's T̄
 //! with a stage change, the Bi = 1 slab series solution with fitted
 //! convergence rates in h and Δt, and the heat balance of a staged run.
 
