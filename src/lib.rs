@@ -21,3 +21,4 @@ pub mod schedule;
 pub mod sim;
 pub mod study;
 pub mod thermal;
+pub mod tui;

@@ -57,6 +57,30 @@ enum Command {
         #[arg(long)]
         fail_on_flag: bool,
     },
+    /// The plan in a terminal UI: the dam's joints at a glance, zone
+    /// histories and rules, what-if supercooling or dates re-simulated from
+    /// the run's checkpoints.
+    Tui {
+        /// A run folder written by `groutready plan`, or a scene file to plan
+        /// first (default: the bundled demo, planned into runs/demo_arch
+        /// unless that folder's plan is up to date).
+        target: Option<PathBuf>,
+        /// Schedules folder of a scene (default: the scene's `schedules`).
+        #[arg(long)]
+        schedules: Option<PathBuf>,
+        /// Run folder to plan into (default: runs/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// As for `plan`.
+        #[arg(long, value_parser = parse_date)]
+        as_of: Option<chrono::NaiveDate>,
+        /// As for `plan`.
+        #[arg(long)]
+        horizon_days: Option<u32>,
+        /// Plan again from day 0 even if the run folder is up to date.
+        #[arg(long)]
+        from_scratch: bool,
+    },
     /// Benchmarks: what accuracy costs in time.
     Study {
         #[command(subcommand)]
@@ -252,6 +276,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 0
             })
         }
+        Command::Tui {
+            target,
+            schedules,
+            out,
+            as_of,
+            horizon_days,
+            from_scratch,
+        } => tui(target, schedules, out, as_of, horizon_days, from_scratch),
         Command::Study {
             what: StudyCommand::Restart { scene },
         } => {
@@ -308,4 +340,68 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             Ok(0)
         }
     }
+}
+
+fn tui(
+    target: Option<PathBuf>,
+    schedules: Option<PathBuf>,
+    out: Option<PathBuf>,
+    as_of: Option<chrono::NaiveDate>,
+    horizon_days: Option<u32>,
+    from_scratch: bool,
+) -> anyhow::Result<u8> {
+    use groutready::tui::{self, RunData, Session};
+    let color = tui::color_wanted();
+    let target = target.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    let session = if target.is_dir() {
+        let scene_only = [
+            ("--schedules", schedules.is_some()),
+            ("--out", out.is_some()),
+            ("--as-of", as_of.is_some()),
+            ("--horizon-days", horizon_days.is_some()),
+            ("--from-scratch", from_scratch),
+        ];
+        if let Some((flag, _)) = scene_only.iter().find(|f| f.1) {
+            anyhow::bail!(
+                "{flag} applies to a scene; {} is a run folder (plan it again with `groutready plan`)",
+                target.display()
+            );
+        }
+        let data =
+            RunData::load(&target).with_context(|| format!("opening {}", target.display()))?;
+        Session::open(data, color)
+    } else {
+        let out = out.unwrap_or_else(|| default_out(&target));
+        // Bad input is reported here, before the terminal is taken over.
+        let inputs = app::load_inputs(&target, schedules.as_deref())?;
+        let today = chrono::Local::now().date_naive();
+        let as_of = as_of
+            .unwrap_or_else(|| groutready::planner::plan::default_as_of(&inputs.schedules, today));
+        let horizon = horizon_days.or(inputs.scene.planner.horizon_days);
+        let current = !from_scratch
+            && app::restart::up_to_date(&out, &inputs.scene, &inputs.schedules, as_of, horizon);
+        if current {
+            let data = RunData::load(&out).with_context(|| format!("opening {}", out.display()))?;
+            let mut s = Session::open(data, color);
+            s.app.status = Some(format!(
+                "{}: the plan there is up to date (--from-scratch plans again)",
+                out.display()
+            ));
+            s
+        } else {
+            let request = app::plan::PlanRequest {
+                as_of: Some(as_of),
+                horizon_days,
+                from_scratch,
+            };
+            Session::plan(inputs, out, request, color)
+        }
+    };
+    let failed = |s: &Session| s.app.planning.as_ref().and_then(|p| p.error.clone());
+    let mut session = session;
+    tui::terminal::run_until_quit(&mut session).context("the terminal UI needs a terminal")?;
+    if let Some(e) = failed(&session) {
+        anyhow::bail!("planning failed: {e}");
+    }
+    Ok(0)
 }

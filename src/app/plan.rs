@@ -131,6 +131,7 @@ pub fn plan(
         keep_from,
         prev_dir.as_deref(),
     )?;
+    restart::save_plan(dir, scene, &out_plan.plan)?;
     let p = dir.join("run.txt");
     std::fs::write(&p, run_text(inputs, &out_plan.baseline)).map_err(io_err(&p))?;
     let out = staging.commit().map_err(io_err(out))?;

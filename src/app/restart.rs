@@ -6,10 +6,17 @@
 //! (`ck-DDDDD.bin`, DDDDD the day since the epoch). The next plan with the
 //! same scene restarts from the latest checkpoint on or before the first date
 //! its schedules differ from `inputs/` (and not after its own end).
+//!
+//! The folder also keeps the scene as simulated (`scene.json`) and the whole
+//! plan (`plan.bin`), so `groutready tui RUN_DIR` can show a run and
+//! re-simulate what-ifs from its checkpoints without the scene's file.
 
 use std::path::{Path, PathBuf};
 
+use chrono::NaiveDate;
+
 use crate::planner::edit::first_change;
+use crate::planner::Plan;
 use crate::scene::Scene;
 use crate::schedule::{self, Schedules};
 use crate::sim::checkpoint::{read_file, write_file, CheckpointError};
@@ -19,6 +26,8 @@ pub const RESTART_DIR: &str = "restart";
 const FINGERPRINT: &str = "fingerprint.txt";
 const HISTORY: &str = "history.bin";
 const INPUTS: &str = "inputs";
+const SCENE: &str = "scene.json";
+const PLAN: &str = "plan.bin";
 
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.
@@ -158,4 +167,132 @@ pub fn save(
         }
     }
     Ok(n)
+}
+
+fn json_err(path: &Path) -> impl FnOnce(serde_json::Error) -> CheckpointError + '_ {
+    move |source| CheckpointError::Json {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> CheckpointError + '_ {
+    move |source| CheckpointError::Io {
+        path: path.display().to_string(),
+        source,
+    }
+}
+
+/// Writes the scene as simulated and the plan into the staged `restart/`.
+pub fn save_plan(staging: &Path, scene: &Scene, plan: &Plan) -> Result<(), CheckpointError> {
+    let dir = staging.join(RESTART_DIR);
+    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+    let path = dir.join(SCENE);
+    let text = serde_json::to_string_pretty(scene).map_err(json_err(&path))?;
+    std::fs::write(&path, text).map_err(io_err(&path))?;
+    // postcard, not JSON: a plan may hold NaN (an aperture not measured).
+    write_file(&dir.join(PLAN), plan, "plan")
+}
+
+/// A planned run folder, everything loaded: what the TUI shows and the
+/// what-if re-simulates from.
+pub struct Opened {
+    pub dir: PathBuf,
+    pub scene: Scene,
+    /// the schedules as planned
+    pub schedules: Schedules,
+    pub plan: Plan,
+    pub history: History,
+    /// the checkpoints kept, by day
+    pub checkpoints: Vec<Checkpoint>,
+}
+
+/// Whether `dir` looks like a planned run folder.
+pub fn is_run_folder(dir: &Path) -> bool {
+    dir.join(RESTART_DIR).join(PLAN).is_file()
+}
+
+/// Opens a planned run folder.
+pub fn open(dir: &Path) -> Result<Opened, CheckpointError> {
+    let r = dir.join(RESTART_DIR);
+    let read = |name: &str| -> Result<String, CheckpointError> {
+        let p = r.join(name);
+        std::fs::read_to_string(&p).map_err(|source| {
+            if source.kind() == std::io::ErrorKind::NotFound {
+                CheckpointError::NotARunFolder {
+                    path: dir.display().to_string(),
+                    missing: format!("{RESTART_DIR}/{name}"),
+                }
+            } else {
+                CheckpointError::Io {
+                    path: p.display().to_string(),
+                    source,
+                }
+            }
+        })
+    };
+    let scene_path = r.join(SCENE);
+    let scene: Scene = serde_json::from_str(&read(SCENE)?).map_err(json_err(&scene_path))?;
+    if read(FINGERPRINT)? != fingerprint(&scene) {
+        return Err(CheckpointError::OtherVersion(dir.display().to_string()));
+    }
+    if !r.join(PLAN).is_file() {
+        return Err(CheckpointError::NotARunFolder {
+            path: dir.display().to_string(),
+            missing: format!("{RESTART_DIR}/{PLAN}"),
+        });
+    }
+    let plan: Plan = read_file(&r.join(PLAN))?;
+    let inputs = r.join(INPUTS);
+    let schedules = schedule::load(&inputs).map_err(|e| CheckpointError::Schedules {
+        path: inputs.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut checkpoints: Vec<Checkpoint> = list(&r)?
+        .iter()
+        .map(|(_, p)| read_file(p))
+        .collect::<Result<_, _>>()?;
+    checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+    Ok(Opened {
+        dir: dir.to_path_buf(),
+        scene,
+        schedules,
+        plan,
+        history: read_file(&r.join(HISTORY))?,
+        checkpoints,
+    })
+}
+
+/// Whether `dir` holds a plan of exactly this scene, these schedules and
+/// this as-of date and horizon: opening it shows what planning again would.
+pub fn up_to_date(
+    dir: &Path,
+    scene: &Scene,
+    schedules: &Schedules,
+    as_of: NaiveDate,
+    horizon_days: Option<u32>,
+) -> bool {
+    let r = dir.join(RESTART_DIR);
+    let same_fingerprint =
+        std::fs::read_to_string(r.join(FINGERPRINT)).is_ok_and(|f| f == fingerprint(scene));
+    if !same_fingerprint {
+        return false;
+    }
+    let Ok(old) = schedule::load(&r.join(INPUTS)) else {
+        return false;
+    };
+    let Ok(plan) = read_file::<Plan>(&r.join(PLAN)) else {
+        return false;
+    };
+    // The plan's zones are those of grouting.csv within the horizon.
+    let last = horizon_days.map(|h| as_of + chrono::Duration::days(h as i64));
+    let want = schedules
+        .grouting
+        .iter()
+        .filter(|g| last.is_none_or(|l| g.planned <= l))
+        .count();
+    old == *schedules
+        && plan.as_of == as_of
+        && plan.settings == scene.planner
+        && plan.zones.len() == want
 }

@@ -11,6 +11,8 @@
 //! - [`edit`]: the schedule edits a remedy makes (supercooling from the as-of
 //!   date on, moved grouting dates);
 //! - [`search`]: the remedy search, every answer a re-simulation;
+//! - [`whatif`]: one zone's remedy of the engineer's choosing, re-simulated
+//!   the same way (the TUI's what-if);
 //! - [`plan`]: all of it for one scene and schedules, into a [`Plan`]
 //!   ([`readiness`]) that the reports and the TUI read.
 //!
@@ -28,6 +30,7 @@ pub mod rules;
 pub mod runner;
 pub mod search;
 pub mod settings;
+pub mod whatif;
 
 pub use plan::{plan, PlanOptions, PlanOutput, Progress};
 pub use readiness::*;

@@ -194,7 +194,7 @@ pub enum Progress {
     Resimulation(String),
 }
 
-fn zone_history(
+pub fn zone_history(
     rules: &Rules,
     idx: &HistoryIndex,
     joint: u32,

@@ -3,12 +3,12 @@
 //! report writers and the TUI.
 
 use chrono::NaiveDate;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::settings::PlannerSettings;
 
 /// A readiness rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Rule {
     /// aperture at the deciding point ≥ `min_aperture_mm`
@@ -44,7 +44,7 @@ impl Rule {
 }
 
 /// One rule checked on one zone.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RuleCheck {
     pub rule: Rule,
     /// the value checked (mm, °C, days, m; for bottom-up the days the zone
@@ -59,7 +59,7 @@ pub struct RuleCheck {
 
 /// Apertures of a zone on one date [mm]; None where the zone's two blocks do
 /// not both exist yet.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Apertures {
     pub upstream: Option<f64>,
     pub center: Option<f64>,
@@ -68,7 +68,7 @@ pub struct Apertures {
 }
 
 /// The planner's verdict on a zone.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// every rule passes
@@ -94,7 +94,7 @@ impl Verdict {
 }
 
 /// Readiness of one (joint, zone) on its planned date.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ZoneReadiness {
     pub joint: u32,
     pub zone: u32,
@@ -134,7 +134,7 @@ impl ZoneReadiness {
 }
 
 /// Supercooling of the zone's second-stage cooling (and the region above).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SupercoolOption {
     /// lowering of the cooling target [°C]
     pub delta_c: f64,
@@ -143,7 +143,7 @@ pub struct SupercoolOption {
 }
 
 /// Delay of the zone's grouting.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DelayOption {
     pub days: u32,
     pub date: NaiveDate,
@@ -154,7 +154,7 @@ pub struct DelayOption {
 }
 
 /// Which remedy the planner proposes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RemedyChoice {
     Supercool,
@@ -165,7 +165,7 @@ pub enum RemedyChoice {
 
 /// The remedies found for a zone that is not groutable, each verified by
 /// re-simulation.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Remedy {
     pub supercool: Option<SupercoolOption>,
     pub delay: Option<DelayOption>,
@@ -178,7 +178,7 @@ pub struct Remedy {
 }
 
 /// Aperture and temperature history of one zone, for charts.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ZoneHistory {
     pub joint: u32,
     pub zone: u32,
@@ -194,7 +194,7 @@ pub struct ZoneHistory {
 }
 
 /// One joint-meter reading against the prediction at its point and date.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MeterComparison {
     pub joint: u32,
     pub zone: u32,
@@ -207,7 +207,7 @@ pub struct MeterComparison {
 }
 
 /// How the plan was computed.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct PlanStats {
     /// seconds of the baseline simulation (from day 0 or a restart)
     pub baseline_seconds: f64,
@@ -221,7 +221,7 @@ pub struct PlanStats {
 }
 
 /// The planner's answer for one scene and one set of schedules.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
     pub scene: String,
     pub as_of: NaiveDate,

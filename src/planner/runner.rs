@@ -56,22 +56,54 @@ impl<'a> Runner<'a> {
             sim.restore(ck, history);
         }
         let stats = sim.run(None, progress)?;
-        let runner = Runner {
+        let runner = Runner::from_parts(
             scene,
             mesh,
-            base: schedules.clone(),
-            checkpoints: std::mem::take(&mut sim.checkpoints),
-            history: sim.history(),
-            counters: std::sync::Mutex::new((0, 0.0)),
-        };
+            schedules.clone(),
+            std::mem::take(&mut sim.checkpoints),
+            sim.history(),
+        );
         Ok((runner, stats))
+    }
+
+    /// A runner over a finished baseline: its schedules, checkpoints and
+    /// histories as a run folder keeps them (`app::restart`).
+    pub fn from_parts(
+        scene: &'a Scene,
+        mesh: &'a Mesh,
+        base: Schedules,
+        mut checkpoints: Vec<Checkpoint>,
+        history: History,
+    ) -> Runner<'a> {
+        checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+        Runner {
+            scene,
+            mesh,
+            base,
+            checkpoints,
+            history,
+            counters: std::sync::Mutex::new((0, 0.0)),
+        }
     }
 
     /// Simulates `schedules` over `span`, restarting from the latest baseline
     /// checkpoint on or before the first date they differ from the baseline.
     pub fn simulate(&self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
+        self.simulate_with(schedules, span, None, &mut |_, _| {})
+    }
+
+    /// [`Runner::simulate`] that can be cancelled from another thread and
+    /// reports its (day, end) after every step.
+    pub fn simulate_with(
+        &self,
+        schedules: &Schedules,
+        span: &Span,
+        cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<History, SimError> {
         let t = Instant::now();
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
+        sim.cancel = cancel;
         sim.set_end_day(span.end_day);
         let from = first_change(&self.base, schedules).map(|d| self.day_of(d));
         // Observed days before the restart are recorded by the baseline already.
@@ -93,7 +125,7 @@ impl<'a> Runner<'a> {
         if let Some(ck) = &restart {
             sim.restore(ck, &self.history);
         }
-        sim.run(None, &mut |_, _| {})?;
+        sim.run(None, progress)?;
         let mut c = self.counters.lock().unwrap_or_else(|e| e.into_inner());
         c.0 += 1;
         c.1 += t.elapsed().as_secs_f64();

@@ -274,7 +274,7 @@ pub fn search(
     }
 }
 
-fn lifts_above(rules: &Rules) -> u32 {
+pub(crate) fn lifts_above(rules: &Rules) -> u32 {
     (rules.settings.supercool_above_m / rules.lift_height).round() as u32
 }
 

@@ -696,7 +696,8 @@ mod dates {
     }
 
     pub(super) fn opt_date<'de, D: Deserializer<'de>>(d: D) -> Result<Option<NaiveDate>, D::Error> {
-        date(d).map(Some)
+        // A run folder's scene.json writes a date left out as null.
+        <Option<Wrapped> as serde::Deserialize>::deserialize(d).map(|o| o.map(|w| w.0))
     }
 
     struct SeqVisitor;

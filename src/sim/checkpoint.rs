@@ -65,6 +65,21 @@ pub enum CheckpointError {
         path: String,
         source: postcard::Error,
     },
+    #[error("{path}: {source}")]
+    Json {
+        path: String,
+        source: serde_json::Error,
+    },
+    #[error(
+        "{path} is not a planned run folder: {missing} is missing (run `groutready plan` first)"
+    )]
+    NotARunFolder { path: String, missing: String },
+    #[error(
+        "{0} was planned by another version of groutready or its scene.json was edited: plan again"
+    )]
+    OtherVersion(String),
+    #[error("{path}: {message}")]
+    Schedules { path: String, message: String },
     #[error("encoding {what}: {source}")]
     Encode {
         what: &'static str,

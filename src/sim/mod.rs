@@ -35,6 +35,8 @@ pub enum SimError {
     },
     #[error("the scene has the reservoir_temperature effect but {0} has no reservoir.csv")]
     NoReservoir(String),
+    #[error("cancelled on {0}")]
+    Cancelled(NaiveDate),
     #[error("writing snapshot {path}: {source}")]
     Snapshot {
         path: String,
@@ -126,6 +128,9 @@ pub struct Simulation<'a> {
     /// after the last one (None: no checkpoints).
     pub checkpoint_every: Option<f64>,
     pub checkpoints: Vec<Checkpoint>,
+    /// Set from another thread to stop the run at the end of its current step
+    /// with [`SimError::Cancelled`] (a what-if the engineer gave up on).
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
     /// the current day's events are still to apply (a fresh or restored run)
     events_pending: bool,
     pours_done: usize,
@@ -272,6 +277,7 @@ impl<'a> Simulation<'a> {
             snapshots: Vec::new(),
             checkpoint_every: None,
             checkpoints: Vec::new(),
+            cancel: None,
             events_pending: true,
             pours_done: 0,
             steps: 0,
@@ -358,6 +364,15 @@ impl<'a> Simulation<'a> {
             self.events_pending = false;
         }
         while self.day < end {
+            if self
+                .cancel
+                .as_ref()
+                .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+            {
+                return Err(SimError::Cancelled(
+                    self.scene.epoch + chrono::Duration::days(self.day.floor() as i64),
+                ));
+            }
             let next = self.timeline.next_event_after(self.day);
             let dt = self.ladder.next_step(self.day, next);
             let t1 = snap(self.day + dt);

@@ -1,0 +1,386 @@
+//! One zone: aperture and temperature charts on the left; the readiness
+//! rules and the plan's remedy on the right, or the what-if form with the
+//! plan's and the what-if's answers side by side.
+
+use chrono::NaiveDate;
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
+
+use super::chart::{self, Series};
+use super::Theme;
+use crate::planner::{Rule, RuleCheck, Verdict, ZoneReadiness};
+use crate::report::words::{
+    deciding_aperture, max_block_temp, mm, opt, remedy_short, verdict_symbol, verdict_words,
+    verified_words,
+};
+use crate::tui::app::{App, Field, WhatIfForm, ZoneView};
+use crate::tui::data::RunData;
+
+pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+    let Some(view) = &app.zone else {
+        Paragraph::new("No zone open: choose one on the overview or the flagged list (Enter).")
+            .render(area, buf);
+        return;
+    };
+    let [title, body] = Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(area);
+    render_title(view, data, theme, title, buf);
+    let side_w = 36.min(area.width / 2);
+    let [charts, side] =
+        Layout::horizontal([Constraint::Min(20), Constraint::Length(side_w)]).areas(body);
+    render_charts(view, data, theme, charts, buf);
+    match &view.whatif {
+        Some(form) => render_whatif(view, form, data, theme, side, buf),
+        None => render_rules(view, data, theme, side, buf),
+    }
+}
+
+fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+    let mut spans = vec![Span::styled(
+        format!("Joint {} zone {}", view.joint, view.zone),
+        theme.title(),
+    )];
+    let extent = data.zone_extent_text(view.joint, view.zone);
+    if !extent.is_empty() {
+        spans.push(Span::raw(format!(" · {extent}")));
+    }
+    if let Some(p) = view.planned {
+        spans.push(Span::raw(format!(" · planned {p}")));
+    }
+    if let Some(r) = &view.readiness {
+        spans.push(Span::raw(" · "));
+        if r.history {
+            spans.push(Span::styled("■ grouted", theme.dim()));
+        } else {
+            spans.push(Span::styled(
+                format!("{} {}", verdict_symbol(r.verdict), verdict_words(r.verdict)),
+                theme.verdict(r.verdict),
+            ));
+        }
+    }
+    Paragraph::new(Line::from(spans)).render(area, buf);
+}
+
+fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+    let h = &view.history;
+    let result = view
+        .whatif
+        .as_ref()
+        .and_then(|f| f.result.as_ref())
+        .filter(|r| (r.what_if.joint, r.what_if.zone) == (view.joint, view.zone));
+    let (Some(&t0), Some(&last)) = (h.dates.first(), h.dates.last()) else {
+        Paragraph::new("The zone has no history yet: its blocks are not both poured.")
+            .block(Block::bordered())
+            .render(area, buf);
+        return;
+    };
+    let mut t1 = last;
+    if let Some(p) = view.planned {
+        t1 = t1.max(p);
+    }
+    if let Some(r) = result {
+        t1 = t1.max(r.what_if.date);
+    }
+    let [top, bottom] =
+        Layout::vertical([Constraint::Percentage(58), Constraint::Percentage(42)]).areas(area);
+    let names = ["up", "ctr", "down"];
+    let mut series: Vec<Series> = [&h.upstream, &h.center, &h.downstream]
+        .iter()
+        .enumerate()
+        .map(|(i, v)| Series {
+            name: names[i],
+            points: chart::points(h, t0, v),
+            style: theme.series(i),
+            marker: chart::marker(theme, i),
+        })
+        .collect();
+    let point = data.plan.settings.aperture_point;
+    if let Some(r) = result {
+        let v = match point {
+            crate::planner::DecidingPoint::Min => &r.history.min,
+            crate::planner::DecidingPoint::Upstream => &r.history.upstream,
+            crate::planner::DecidingPoint::Center => &r.history.center,
+            crate::planner::DecidingPoint::Downstream => &r.history.downstream,
+        };
+        series.push(Series {
+            name: "what-if",
+            points: chart::points(&r.history, t0, v),
+            style: theme.series(3),
+            marker: chart::marker(theme, 3),
+        });
+    }
+    let s = &data.plan.settings;
+    let mark = result.map(|r| r.what_if.date).or(view.planned);
+    chart::render(
+        "mm",
+        "mm",
+        t0,
+        t1,
+        &series,
+        Some(("limit", s.min_aperture_mm)),
+        mark,
+        theme,
+        top,
+        buf,
+    );
+    let closure = view
+        .readiness
+        .as_ref()
+        .map_or(s.closure_temp_c, |r| r.closure_temp_c);
+    let mut temps = vec![Series {
+        name: "zone",
+        points: chart::points(h, t0, &h.temperature),
+        style: theme.series(1),
+        marker: chart::marker(theme, 1),
+    }];
+    if let Some(r) = result {
+        temps.push(Series {
+            name: "what-if",
+            points: chart::points(&r.history, t0, &r.history.temperature),
+            style: theme.series(3),
+            marker: chart::marker(theme, 3),
+        });
+    }
+    chart::render(
+        "°C",
+        "°C",
+        t0,
+        t1,
+        &temps,
+        Some(("closure", closure)),
+        mark,
+        theme,
+        bottom,
+        buf,
+    );
+}
+
+/// "0.40 mm ≥ 0.50", "16.9 °C ≤ 13.5", … for a rule's value and limit.
+fn rule_text(c: &RuleCheck) -> (String, String) {
+    let v = |f: &dyn Fn(f64) -> String| opt(c.value, f);
+    match c.rule {
+        Rule::Aperture => (
+            "aperture".into(),
+            format!("{} ≥ {} mm", v(&|x| mm(x)), mm(c.limit)),
+        ),
+        Rule::Temperature => (
+            "temperature".into(),
+            format!("{} ≤ {:.1} °C", v(&|x| format!("{x:.1}")), c.limit),
+        ),
+        Rule::Age => (
+            "age".into(),
+            format!("{} ≥ {:.0} d", v(&|x| format!("{x:.0}")), c.limit),
+        ),
+        Rule::Cover => (
+            "cover".into(),
+            format!("{} ≥ {:.1} m", v(&|x| format!("{x:.1}")), c.limit),
+        ),
+        Rule::BottomUp => (
+            "bottom-up".into(),
+            format!("{} ≥ {:.0} d", v(&|x| format!("{x:.0}")), c.limit),
+        ),
+    }
+}
+
+fn rule_lines<'a>(r: &ZoneReadiness, theme: &Theme) -> Vec<Line<'a>> {
+    r.checks
+        .iter()
+        .map(|c| {
+            let (name, text) = rule_text(c);
+            Line::from(vec![
+                Span::styled(if c.passed { "✓ " } else { "✗ " }, theme.pass(c.passed)),
+                Span::raw(format!("{name:<12}{text}")),
+            ])
+        })
+        .collect()
+}
+
+fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+    let mut lines = Vec::new();
+    match &view.readiness {
+        None => {
+            lines.push(Line::from(
+                "Not in this plan: the zone is planned after the plan's horizon or not \
+                 in grouting.csv.",
+            ));
+        }
+        Some(r) => {
+            lines.push(Line::from(Span::styled(
+                format!("Rules on {}", r.planned),
+                theme.title(),
+            )));
+            lines.extend(rule_lines(r, theme));
+            if let Some(d) = r.reopened {
+                lines.push(Line::from(Span::styled(
+                    format!("! re-opened {d}"),
+                    theme.error(),
+                )));
+            }
+            if let Some(rem) = &r.remedy {
+                lines.push(Line::default());
+                lines.push(Line::from(Span::styled("Remedy", theme.title())));
+                lines.push(Line::from(Span::styled(remedy_short(rem), theme.key())));
+                if let Some(v) = verified_words(rem) {
+                    lines.push(Line::from(v));
+                }
+                if !rem.note.is_empty() {
+                    lines.push(Line::from(Span::styled(rem.note.clone(), theme.dim())));
+                }
+            } else if r.verdict != Verdict::NotGroutable && !r.history {
+                let a = deciding_aperture(r, data.plan.settings.aperture_point);
+                lines.push(Line::default());
+                lines.push(Line::from(format!(
+                    "{} mm at the {} point",
+                    opt(a, mm),
+                    data.plan.settings.aperture_point.as_str()
+                )));
+            }
+        }
+    }
+    lines.push(Line::default());
+    lines.push(Line::from(vec![
+        Span::styled("w", theme.key()),
+        Span::raw(" what-if: supercool or move the date"),
+    ]));
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: true })
+        .block(Block::bordered().title(" Readiness "))
+        .render(area, buf);
+}
+
+fn render_whatif(
+    view: &ZoneView,
+    form: &WhatIfForm,
+    data: &RunData,
+    theme: &Theme,
+    area: Rect,
+    buf: &mut Buffer,
+) {
+    let block = Block::bordered().title(Span::styled(" What-if ", theme.title()));
+    let inner = block.inner(area);
+    block.render(area, buf);
+    let [fields, progress, compare] = Layout::vertical([
+        Constraint::Length(3),
+        Constraint::Length(3),
+        Constraint::Min(0),
+    ])
+    .areas(inner);
+    let s = &data.plan.settings;
+    let field = |f: Field, name: &str, value: String, hint: String| {
+        let on = form.field == f;
+        Line::from(vec![
+            Span::styled(if on { "▸ " } else { "  " }, theme.key()),
+            Span::raw(format!("{name:<10}")),
+            Span::styled(
+                value,
+                if on {
+                    theme.selected()
+                } else {
+                    ratatui::style::Style::new()
+                },
+            ),
+            Span::styled(format!(" {hint}"), theme.dim()),
+        ])
+    };
+    let planned = view.planned.map(|p| p.to_string()).unwrap_or("–".into());
+    Paragraph::new(vec![
+        field(
+            Field::Supercool,
+            "supercool",
+            format!("{:.2} °C", form.supercool_c),
+            format!("≤ {:.2}", s.max_supercooling_c),
+        ),
+        field(
+            Field::Date,
+            "grout on",
+            form.date.to_string(),
+            format!("plan {}", planned.get(5..).unwrap_or(&planned)),
+        ),
+        Line::from(Span::styled("Enter run · c cancel · s save", theme.dim())),
+    ])
+    .render(fields, buf);
+
+    if let Some(r) = &form.running {
+        let label = if r.cancelling {
+            "cancelling…".to_string()
+        } else {
+            format!("re-simulating {:.0}%", r.fraction() * 100.0)
+        };
+        let [gauge, _] =
+            Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(progress);
+        Gauge::default()
+            .ratio(r.fraction())
+            .label(label)
+            .gauge_style(theme.key())
+            .render(gauge, buf);
+    } else if let Some(m) = &form.message {
+        Paragraph::new(Span::styled(m.clone(), theme.key()))
+            .wrap(Wrap { trim: true })
+            .render(progress, buf);
+    }
+
+    let point = s.aperture_point;
+    let plan = view.readiness.as_ref();
+    let result = form.result.as_ref().map(|r| &r.readiness);
+    let a = |z: Option<&ZoneReadiness>| {
+        z.map(|z| opt(deciding_aperture(z, point), |x| format!("{} mm", mm(x))))
+            .unwrap_or("–".into())
+    };
+    let t = |z: Option<&ZoneReadiness>| {
+        z.map(|z| opt(max_block_temp(z), |x| format!("{x:.1} °C")))
+            .unwrap_or("–".into())
+    };
+    let verdict = |name: &str, z: Option<&ZoneReadiness>| {
+        let (text, style) = z
+            .map(|z| {
+                (
+                    format!("{} {}", verdict_symbol(z.verdict), verdict_words(z.verdict)),
+                    theme.verdict(z.verdict),
+                )
+            })
+            .unwrap_or(("–".into(), ratatui::style::Style::new()));
+        Line::from(vec![
+            Span::raw(format!("{name:<9}")),
+            Span::styled(text, style),
+        ])
+    };
+    let date = |z: Option<&ZoneReadiness>, d: Option<NaiveDate>| {
+        z.map(|z| z.planned)
+            .or(d)
+            .map(|d| d.to_string())
+            .unwrap_or("–".into())
+    };
+    let row = |name: &str, p: String, w: String| Line::from(format!("{name:<9}{p:<12}{w}"));
+    let mut lines = vec![
+        Line::from(Span::styled(
+            format!("{:<9}{:<12}{}", "", "plan", "what-if"),
+            theme.dim(),
+        )),
+        row("aperture", a(plan), a(result)),
+        row("hottest", t(plan), t(result)),
+        Line::from(format!(
+            "{:<9}{} → {}",
+            "date",
+            date(plan, view.planned),
+            date(result, None).get(5..).unwrap_or("–")
+        )),
+        verdict("plan", plan),
+        verdict("what-if", result),
+    ];
+    if let Some(r) = result.filter(|r| r.verdict == Verdict::NotGroutable) {
+        lines.push(Line::from(Span::styled(r.reasons(), theme.dim())));
+    }
+    if let Some(o) = &form.result {
+        if !o.also_moved.is_empty() {
+            let z: Vec<String> = o.also_moved.iter().map(u32::to_string).collect();
+            lines.push(Line::from(Span::styled(
+                format!("zones {} above move too", z.join(", ")),
+                theme.dim(),
+            )));
+        }
+    }
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: true })
+        .render(compare, buf);
+}
