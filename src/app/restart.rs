@@ -291,7 +291,20 @@ pub fn up_to_date(
         .iter()
         .filter(|g| last.is_none_or(|l| g.planned <= l))
         .count();
-    old == *schedules
+    // Line numbers differ between the site's files and `inputs/`; what is
+    // simulated and what the plan reads must not.
+    let meters = |s: &Schedules| -> Vec<(u32, u32, String, NaiveDate, u64)> {
+        s.joint_meters
+            .iter()
+            .flatten()
+            .map(|m| {
+                let p = m.point.as_str().to_string();
+                (m.joint, m.zone, p, m.date, m.aperture_mm.to_bits())
+            })
+            .collect()
+    };
+    first_change(&old, schedules).is_none()
+        && meters(&old) == meters(schedules)
         && plan.as_of == as_of
         && plan.settings == scene.planner
         && plan.zones.len() == want

@@ -5,7 +5,6 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
 
 use groutready::app;
 use groutready::planner::rules::{HistoryIndex, Rules};
@@ -14,19 +13,12 @@ use groutready::sim::Simulation;
 
 #[test]
 fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
-    let tmp = tempfile::tempdir().unwrap();
-    // Exactly the README command, run from an empty folder (the demo scene
-    // is found next to the program's sources).
-    let o = Command::new(env!("CARGO_BIN_EXE_groutready"))
-        .arg("plan")
-        .current_dir(tmp.path())
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(0), "{stdout}\n{stderr}");
+    // Exactly the README command, run from an empty folder.
+    let p = crate::common::demo_plan();
+    let (stdout, stderr) = (p.stdout(), p.stderr());
+    assert_eq!(p.output.status.code(), Some(0), "{stdout}\n{stderr}");
     println!("{stdout}");
-    let out = tmp.path().join("runs/demo_arch");
+    let out = &p.out;
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let zones = report["zones"].as_array().unwrap();

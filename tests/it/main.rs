@@ -24,3 +24,5 @@ mod restart;
 mod scene_errors;
 mod schedule_errors;
 mod thermal_closed_forms;
+mod tui_screens;
+mod tui_tmux;

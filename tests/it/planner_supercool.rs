@@ -7,7 +7,6 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
 
 use groutready::app;
 use groutready::planner::edit::{self, Supercool};
@@ -56,29 +55,10 @@ fn groutable(inputs: &app::Inputs, s: &Schedules, key: (u32, u32), end: i64) -> 
 
 #[test]
 fn supercooling_found_by_the_plan_is_the_least_that_works_from_scratch() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("plan");
-    let o = Command::new(env!("CARGO_BIN_EXE_groutready"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args([
-            "plan",
-            "models/small_dam_joints.toml",
-            "--as-of",
-            "2024-06-01",
-            "--horizon-days",
-            "105",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let p = crate::common::small_plan();
+    let stdout = p.stdout();
+    assert_eq!(p.output.status.code(), Some(0), "{stdout}\n{}", p.stderr());
+    let out = &p.out;
     println!("{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();

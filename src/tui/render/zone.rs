@@ -318,6 +318,12 @@ fn render_whatif(
         Paragraph::new(Span::styled(m.clone(), theme.key()))
             .wrap(Wrap { trim: true })
             .render(progress, buf);
+    } else if let Some(r) = &form.result {
+        Paragraph::new(Span::styled(
+            format!("re-simulated in {:.1} s", r.seconds),
+            theme.dim(),
+        ))
+        .render(progress, buf);
     }
 
     let point = s.aperture_point;

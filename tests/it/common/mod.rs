@@ -209,3 +209,72 @@ pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
         std::fs::copy(entry.path(), to.join(entry.file_name())).unwrap();
     }
 }
+
+/// A `groutready plan` run shared by every test that needs it: planned once
+/// per test process into `CARGO_TARGET_TMPDIR` (tests that write into a run
+/// folder copy it first).
+pub struct Planned {
+    /// the folder the command ran in
+    pub root: std::path::PathBuf,
+    /// the run folder
+    pub out: std::path::PathBuf,
+    pub output: std::process::Output,
+}
+
+impl Planned {
+    pub fn stdout(&self) -> String {
+        String::from_utf8_lossy(&self.output.stdout).into_owned()
+    }
+    pub fn stderr(&self) -> String {
+        String::from_utf8_lossy(&self.output.stderr).into_owned()
+    }
+}
+
+fn plan_in(name: &str, args: &[&str], from_crate: bool) -> Planned {
+    let root = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(&root).unwrap();
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_groutready"));
+    c.current_dir(if from_crate {
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    } else {
+        root.clone()
+    });
+    c.arg("plan").args(args);
+    let out = if from_crate {
+        let out = root.join("plan");
+        c.arg("--out").arg(&out);
+        out
+    } else {
+        root.join("runs/demo_arch")
+    };
+    let output = c.output().unwrap();
+    Planned { root, out, output }
+}
+
+/// The README's main command, `groutready plan` with no arguments, run from
+/// an empty folder (the demo is found next to the program's sources).
+pub fn demo_plan() -> &'static Planned {
+    static P: std::sync::OnceLock<Planned> = std::sync::OnceLock::new();
+    P.get_or_init(|| plan_in("demo_plan", &[], false))
+}
+
+/// The small dam planned from 1 June 2024 over 105 days: zones grouted
+/// before, zones too warm with no remedy, zones supercooling fixes, zones
+/// not poured yet.
+pub fn small_plan() -> &'static Planned {
+    static P: std::sync::OnceLock<Planned> = std::sync::OnceLock::new();
+    P.get_or_init(|| {
+        plan_in(
+            "small_plan",
+            &[
+                "models/small_dam_joints.toml",
+                "--as-of",
+                "2024-06-01",
+                "--horizon-days",
+                "105",
+            ],
+            true,
+        )
+    })
+}

@@ -1,0 +1,328 @@
+//! The TUI without a terminal: every screen drawn at 80×24 into ratatui's
+//! `TestBackend` on the small dam's plan (snapshots under `snapshots/`), key
+//! sequences driving the same `Session` the terminal loop drives, a what-if
+//! re-simulated and saved, and one cancelled.
+
+use std::time::Duration;
+
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+use ratatui::style::Color;
+use ratatui::Terminal;
+
+use groutready::planner::edit::first_change;
+use groutready::planner::Verdict;
+use groutready::schedule;
+use groutready::tui::{App, Event, JobEvent, Pane, RunData, Session};
+
+use crate::common;
+
+/// The small dam's plan, opened (what-ifs save into `dir` when given).
+fn session(dir: Option<&std::path::Path>, color: bool) -> Session {
+    let p = common::small_plan();
+    assert_eq!(p.output.status.code(), Some(0), "{}", p.stderr());
+    let mut data = RunData::load(&p.out).unwrap();
+    if let Some(d) = dir {
+        data.dir = d.to_path_buf();
+    }
+    Session::open(data, color)
+}
+
+fn draw(app: &App, w: u16, h: u16) -> Terminal<TestBackend> {
+    let mut t = Terminal::new(TestBackend::new(w, h)).unwrap();
+    t.draw(|f| f.render_widget(app, f.area())).unwrap();
+    t
+}
+
+/// The screen as text, one line per row, trailing blanks cut.
+fn screen(app: &App, w: u16, h: u16) -> String {
+    let t = draw(app, w, h);
+    let buf = t.backend().buffer();
+    let mut s = String::new();
+    for y in 0..h {
+        let mut line = String::new();
+        for x in 0..w {
+            line.push_str(buf[(x, y)].symbol());
+        }
+        s.push_str(line.trim_end());
+        s.push('\n');
+    }
+    s
+}
+
+fn keys(s: &mut Session, keys: &str) {
+    for c in keys.chars() {
+        s.handle(Event::char(c));
+    }
+}
+
+fn key(s: &mut Session, code: KeyCode) {
+    s.handle(Event::key(code));
+}
+
+/// `/` jump to a zone: the screen a site engineer gets by typing `/1 4⏎`.
+fn open(s: &mut Session, joint: u32, zone: u32) {
+    keys(s, &format!("/{joint} {zone}"));
+    key(s, KeyCode::Enter);
+    let z = s.app.zone.as_ref().expect("a zone is open");
+    assert_eq!((z.joint, z.zone, s.app.pane), (joint, zone, Pane::Zone));
+}
+
+#[test]
+fn overview_screen() {
+    let s = session(None, true);
+    let text = screen(&s.app, 80, 24);
+    // The cursor starts on the first flagged zone.
+    assert_eq!(s.app.cursor, (1, 1));
+    assert!(text.contains("8 of 12 to grout flagged"), "{text}");
+    insta::assert_snapshot!("overview", text);
+}
+
+#[test]
+fn flagged_list_screen_and_enter_opens_the_zone() {
+    let mut s = session(None, true);
+    key(&mut s, KeyCode::Tab);
+    assert_eq!(s.app.pane, Pane::Flagged);
+    insta::assert_snapshot!("flagged", screen(&s.app, 80, 24));
+    keys(&mut s, "jj");
+    key(&mut s, KeyCode::Enter);
+    let z = s.app.zone.as_ref().unwrap();
+    // The third flagged zone by planned date: joint 1, zone 2 (3 July).
+    assert_eq!((z.joint, z.zone, s.app.pane), (1, 2, Pane::Zone));
+}
+
+#[test]
+fn zone_detail_screen() {
+    let mut s = session(None, true);
+    open(&mut s, 1, 4);
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("supercool 1.25 °C"), "{text}");
+    insta::assert_snapshot!("zone_detail", text);
+}
+
+#[test]
+fn help_screen_opens_and_closes() {
+    let mut s = session(None, true);
+    keys(&mut s, "?");
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("save the schedules as a CSV set"), "{text}");
+    insta::assert_snapshot!("help", text);
+    key(&mut s, KeyCode::Esc);
+    assert!(!s.app.help);
+    assert!(!s.app.quit);
+}
+
+#[test]
+fn planning_screen_shows_progress_and_failure() {
+    let mut app = App::planning("Small dam with joints", true);
+    app.update(Event::Job(JobEvent::PlanBaseline {
+        day: 90.0,
+        end: 180.0,
+    }));
+    let text = screen(&app, 80, 24);
+    assert!(text.contains("baseline: day 90 of 180"), "{text}");
+    insta::assert_snapshot!("planning", text);
+    app.update(Event::Job(JobEvent::PlanResimulation(
+        "supercooling 2 zones by 3.00 °C".into(),
+    )));
+    app.update(Event::Job(JobEvent::PlanFailed("no pours.csv".into())));
+    let text = screen(&app, 80, 24);
+    assert!(
+        text.contains("The plan failed:") && text.contains("no pours.csv"),
+        "{text}"
+    );
+    app.update(Event::char('q'));
+    assert!(app.quit);
+}
+
+#[test]
+fn whatif_supercooling_is_resimulated_shown_beside_the_plan_and_saved() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut s = session(Some(tmp.path()), true);
+    open(&mut s, 1, 4);
+    keys(&mut s, "w");
+    // Five steps of 0.25 °C: the plan's own remedy for this zone.
+    for _ in 0..5 {
+        key(&mut s, KeyCode::Right);
+    }
+    key(&mut s, KeyCode::Enter);
+    assert!(
+        s.app.running().is_some(),
+        "the what-if runs in the background"
+    );
+    // The UI answers while it runs: the screen draws, keys are taken.
+    let busy = screen(&s.app, 80, 24);
+    assert!(
+        busy.contains("re-simulating") || busy.contains("c cancel"),
+        "{busy}"
+    );
+    assert!(
+        s.wait_idle(Duration::from_secs(300)),
+        "the what-if did not finish"
+    );
+    let form = s.app.zone.as_ref().unwrap().whatif.as_ref().unwrap();
+    let result = form.result.as_ref().expect("a result");
+    assert_eq!(result.what_if.supercool_c, 1.25);
+    assert!(result.not_applied.is_none(), "{:?}", result.not_applied);
+    let plan = s.app.zone.as_ref().unwrap().readiness.clone().unwrap();
+    assert_eq!(plan.verdict, Verdict::NotGroutable);
+    assert_eq!(
+        result.readiness.verdict,
+        Verdict::Groutable,
+        "{}",
+        result.readiness.reasons()
+    );
+    // Cooler than planned on the planned date.
+    let hottest =
+        |z: &groutready::planner::ZoneReadiness| z.temp_a_c.unwrap().max(z.temp_b_c.unwrap());
+    assert!(hottest(&result.readiness) < hottest(&plan) - 0.3);
+    let seconds = result.seconds;
+    assert!(seconds > 0.0);
+    // Wall time is not reproducible: the snapshot shows 0.0 s.
+    let form = s.app.zone.as_mut().unwrap().whatif.as_mut().unwrap();
+    form.result.as_mut().unwrap().seconds = 0.0;
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("what-if  ✓ groutable"), "{text}");
+    assert!(text.contains("re-simulated in 0.0 s"), "{text}");
+    insta::assert_snapshot!("whatif", text);
+
+    keys(&mut s, "s");
+    let saved = tmp.path().join("whatif/j1-z4-sc1.25-2024-09-13");
+    assert!(saved.join("cooling.csv").is_file(), "{:?}", s.app.status);
+    let data = s.app.data.clone().unwrap();
+    let edited = schedule::load(&saved).unwrap();
+    schedule::check_against(&edited, &data.layout).unwrap();
+    let changed = first_change(&data.schedules, &edited).expect("the cooling changed");
+    assert!(
+        changed >= data.plan.as_of,
+        "the past is not re-cooled: {changed}"
+    );
+    assert_eq!(edited.grouting, data.schedules.grouting);
+    // Nothing half-written beside it.
+    let names: Vec<String> = std::fs::read_dir(tmp.path().join("whatif"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["j1-z4-sc1.25-2024-09-13".to_string()]);
+}
+
+#[test]
+fn whatif_can_be_cancelled_and_the_form_stays_usable() {
+    let mut s = session(None, true);
+    open(&mut s, 2, 4);
+    keys(&mut s, "wj");
+    // A week later: a re-simulation from the checkpoint before that week.
+    key(&mut s, KeyCode::PageUp);
+    key(&mut s, KeyCode::Enter);
+    assert!(s.app.running().is_some());
+    keys(&mut s, "c");
+    assert!(s.app.running().unwrap().cancelling);
+    assert!(s.wait_idle(Duration::from_secs(120)));
+    let form = s.app.zone.as_ref().unwrap().whatif.as_ref().unwrap();
+    assert!(form.result.is_none());
+    assert_eq!(form.message.as_deref(), Some("cancelled"));
+    assert!(screen(&s.app, 80, 24).contains("cancelled"));
+    // The form is still there and closes with Esc; a second Esc goes back.
+    key(&mut s, KeyCode::Esc);
+    assert!(s.app.zone.as_ref().unwrap().whatif.is_none());
+    key(&mut s, KeyCode::Esc);
+    assert_eq!(s.app.pane, Pane::Overview);
+}
+
+#[test]
+fn keys_move_jump_switch_panes_and_quit() {
+    let mut s = session(None, true);
+    assert_eq!(s.app.cursor, (1, 1)); // joint 2, zone 2
+    keys(&mut s, "hk");
+    assert_eq!(s.app.cursor, (0, 2)); // joint 1, zone 3: up is up the dam
+    key(&mut s, KeyCode::Down);
+    key(&mut s, KeyCode::Right);
+    key(&mut s, KeyCode::Right);
+    assert_eq!(s.app.cursor, (2, 1));
+    // Clamped at the edges.
+    for _ in 0..9 {
+        keys(&mut s, "l");
+    }
+    assert_eq!(s.app.cursor.0, 3);
+    key(&mut s, KeyCode::Enter);
+    let z = s.app.zone.as_ref().unwrap();
+    assert_eq!((z.joint, z.zone), (4, 2));
+    // Arrows in the zone go to the neighbouring zone.
+    key(&mut s, KeyCode::Up);
+    let z = s.app.zone.as_ref().unwrap();
+    assert_eq!((z.joint, z.zone), (4, 3));
+    // Tab cycles the panes, Shift-Tab back.
+    key(&mut s, KeyCode::Tab);
+    assert_eq!(s.app.pane, Pane::Overview);
+    key(&mut s, KeyCode::Tab);
+    assert_eq!(s.app.pane, Pane::Flagged);
+    s.handle(Event::Key(KeyEvent::new(
+        KeyCode::BackTab,
+        KeyModifiers::SHIFT,
+    )));
+    assert_eq!(s.app.pane, Pane::Overview);
+    // A joint alone moves the overview's cursor.
+    keys(&mut s, "/3");
+    key(&mut s, KeyCode::Enter);
+    assert_eq!((s.app.cursor.0, s.app.pane), (2, Pane::Overview));
+    // A wrong number says what exists, and the prompt stays open.
+    keys(&mut s, "/9");
+    key(&mut s, KeyCode::Enter);
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("no joint 9 (joints 1–4)"), "{text}");
+    key(&mut s, KeyCode::Backspace);
+    keys(&mut s, "2 9");
+    key(&mut s, KeyCode::Enter);
+    assert!(screen(&s.app, 80, 24).contains("joint 2 has no zone 9 (zones 1–7)"));
+    key(&mut s, KeyCode::Esc);
+    assert!(s.app.prompt.is_none());
+    // A zone not poured yet opens too, and says so.
+    open(&mut s, 3, 6);
+    assert!(screen(&s.app, 80, 24).contains("Not in this plan"));
+    s.handle(Event::Key(KeyEvent::new(
+        KeyCode::Char('c'),
+        KeyModifiers::CONTROL,
+    )));
+    assert!(s.app.quit);
+}
+
+#[test]
+fn no_color_draws_symbols_without_colours() {
+    for color in [true, false] {
+        let s = session(None, color);
+        let t = draw(&s.app, 80, 24);
+        let buf = t.backend().buffer();
+        let fg: Vec<Color> = buf.content().iter().map(|c| c.fg).collect();
+        let coloured = fg.iter().filter(|&&c| c != Color::Reset).count();
+        if color {
+            assert!(fg.contains(&Color::Red), "the flagged cells are red");
+        } else {
+            assert_eq!(coloured, 0, "NO_COLOR: no colour at all");
+        }
+        // Either way each state reads from its symbol.
+        let text = screen(&s.app, 80, 24);
+        for sym in ["✗0.65", "✓1.28", "■0.24", "·"] {
+            assert!(text.contains(sym), "{sym} missing:\n{text}");
+        }
+    }
+}
+
+#[test]
+fn every_pane_draws_at_any_size() {
+    let mut s = session(None, true);
+    for (w, h) in [(80, 24), (60, 16), (132, 40), (20, 6), (1, 1)] {
+        for k in ["1", "2", "?", "?"] {
+            keys(&mut s, k);
+            draw(&s.app, w, h);
+        }
+        open(&mut s, 1, 4);
+        keys(&mut s, "w");
+        draw(&s.app, w, h);
+        key(&mut s, KeyCode::Esc);
+        keys(&mut s, "1");
+    }
+    // Wide enough, the whole dam is on one screen with nothing cut.
+    let text = screen(&s.app, 132, 40);
+    assert!(text.contains("J1    J2    J3    J4"), "{text}");
+    assert!(!text.contains('▶'));
+}
