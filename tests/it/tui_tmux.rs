@@ -2,7 +2,8 @@
 //! with `send-keys` and the screen read with `capture-pane` — the demo's
 //! overview, the detail of a flagged zone, a resize, and a clean exit (the
 //! terminal back in cooked mode). Then a scene planned behind the progress
-//! screen, and opened at once the second time because its plan is current.
+//! screen, and opened at once the second time because its plan is current;
+//! and a panic, after which the terminal is restored all the same.
 //!
 //! tmux is installed by `.ci/run`; without it these tests say so and pass
 //! locally, and fail under CI.
@@ -157,7 +158,7 @@ fn tui_in_tmux_shows_the_demo_a_flagged_zone_and_exits_cleanly() {
     let s = t.wait_for("the exit", 10, |s| s.contains("tui exited"));
     assert!(s.contains("tui exited 0"), "{s}");
     assert!(
-        s.lines().any(|l| l.trim() == "icanon"),
+        s.contains("icanon") && !s.contains("-icanon"),
         "the terminal is left in raw mode:\n{s}"
     );
     assert!(
@@ -197,6 +198,31 @@ fn tui_plans_a_scene_behind_a_progress_screen_then_opens_it_at_once() {
     assert!(!s.contains("planning Small dam"));
     t.keys(&["q"]);
     t.wait_for("the exit", 10, |s| s.contains("tui exited 0"));
+}
+
+#[test]
+fn a_panic_in_the_tui_restores_the_terminal() {
+    let p = common::small_plan();
+    assert_eq!(p.output.status.code(), Some(0), "{}", p.stderr());
+    let cmd = format!(
+        "{}=1 {}",
+        groutready::tui::terminal::PANIC_TEST_VAR,
+        line(&quote(&p.out))
+    );
+    let Some(t) = Tmux::start("panic", &cmd, 80, 24) else {
+        return;
+    };
+    let s = t.wait_for("the exit", 30, |s| s.contains("tui exited"));
+    assert!(s.contains("tui exited 101"), "{s}");
+    assert!(s.contains("panicking after the first frame"), "{s}");
+    assert!(
+        s.contains("icanon") && !s.contains("-icanon"),
+        "the terminal is left in raw mode:\n{s}"
+    );
+    assert!(
+        !s.contains("1 Overview"),
+        "the alternate screen is left:\n{s}"
+    );
 }
 
 #[test]
