@@ -52,14 +52,14 @@ pub struct WhatIfOutcome {
 }
 
 /// The schedules of a what-if: returns them, the zones above that move with
-/// it, and whether the supercooling found a stage it may edit.
+/// it, and how much of the supercooling found a stage it may edit.
 pub fn edit_schedules(
     base: &Schedules,
     layout: &DamLayout,
     rules: &Rules,
     as_of: NaiveDate,
     w: &WhatIf,
-) -> (Schedules, Vec<u32>, bool) {
+) -> (Schedules, Vec<u32>, Applied) {
     let mut s = base.clone();
     let mut also = Vec::new();
     let planned = base.grouting_of(w.joint, w.zone).map(|g| g.planned);
@@ -76,24 +76,39 @@ pub fn edit_schedules(
             .collect();
         s = edit::regrout(&s, &moves);
     }
-    let mut applied = true;
+    let mut applied = Applied::Yes;
     if w.supercool_c > 0.0 {
-        let (cooled, not_editable) = edit::supercool(
-            &s,
-            layout,
-            &[Supercool {
-                joint: w.joint,
-                zone: w.zone,
-                delta_c: w.supercool_c,
-                planned: w.date,
-                from: as_of,
-            }],
-            lifts_above(rules),
-        );
-        applied = not_editable.is_empty();
+        let sc = [Supercool {
+            joint: w.joint,
+            zone: w.zone,
+            delta_c: w.supercool_c,
+            planned: w.date,
+            from: as_of,
+        }];
+        let (cooled, not_editable) = edit::supercool(&s, layout, &sc, lifts_above(rules));
+        // The zone's own lifts alone: is their stage editable?
+        let (_, own_not_editable) = edit::supercool(&s, layout, &sc, 0);
+        applied = if !not_editable.is_empty() {
+            Applied::No
+        } else if !own_not_editable.is_empty() {
+            Applied::OnlyAbove
+        } else {
+            Applied::Yes
+        };
         s = cooled;
     }
     (s, also, applied)
+}
+
+/// How much of a what-if's supercooling could be applied.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Applied {
+    Yes,
+    /// only the lifts above the zone: its own stage started before the
+    /// as-of date and runs past the grouting date, or has no target
+    OnlyAbove,
+    /// no lift at all
+    No,
 }
 
 /// Runs a what-if: edits the baseline's schedules, re-simulates from the
@@ -136,13 +151,19 @@ pub fn run(
         readiness,
         history: zone_h,
         also_moved,
-        not_applied: (!applied).then(|| {
-            format!(
-                "no cooling stage of zone {} of joint {} can be supercooled from {as_of}: \
-                 its stage started before and runs past {}",
-                w.zone, w.joint, w.date
-            )
-        }),
+        not_applied: match applied {
+            Applied::Yes => None,
+            Applied::OnlyAbove => Some(format!(
+                "only the lifts above were supercooled: the zone's own cooling stage \
+                 started before {as_of} and runs past {} (or has no target)",
+                w.date
+            )),
+            Applied::No => Some(format!(
+                "nothing supercooled: every cooling stage of the zone started before \
+                 {as_of} and runs past {} (or has no target)",
+                w.date
+            )),
+        },
         seconds: t.elapsed().as_secs_f64(),
     })
 }

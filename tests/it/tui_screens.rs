@@ -321,8 +321,36 @@ fn every_pane_draws_at_any_size() {
         key(&mut s, KeyCode::Esc);
         keys(&mut s, "1");
     }
+    // Too narrow for every joint: the grid follows the cursor sideways, and
+    // says there is more to the left.
+    keys(&mut s, "1llllll");
+    let text = screen(&s.app, 30, 24);
+    assert!(
+        text.contains("J4") && !text.contains("J1 ") && text.contains('◀'),
+        "{text}"
+    );
+    keys(&mut s, "hhhhhh");
+    let text = screen(&s.app, 30, 24);
+    assert!(text.contains("J1") && text.contains('▶'), "{text}");
     // Wide enough, the whole dam is on one screen with nothing cut.
     let text = screen(&s.app, 132, 40);
     assert!(text.contains("J1    J2    J3    J4"), "{text}");
     assert!(!text.contains('▶'));
+}
+
+#[test]
+fn whatif_says_when_supercooling_cannot_reach_the_zone() {
+    let mut s = session(None, true);
+    // Joint 2 zone 2's cooling started before 1 June and runs past its date.
+    open(&mut s, 2, 2);
+    keys(&mut s, "w++++");
+    key(&mut s, KeyCode::Enter);
+    assert!(s.wait_idle(Duration::from_secs(300)));
+    let form = s.app.zone.as_ref().unwrap().whatif.as_ref().unwrap();
+    let result = form.result.as_ref().expect("a result");
+    let why = result.not_applied.as_deref().expect("not applied");
+    assert!(why.contains("supercooled"), "{why}");
+    assert_eq!(result.readiness.verdict, Verdict::NotGroutable);
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("supercooled"), "{text}");
 }

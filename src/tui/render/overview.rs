@@ -112,22 +112,27 @@ fn render_grid(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut B
         }
         lines.push(Line::from(spans));
     }
-    let more_left = if c0 > 0 { "◀ " } else { "" };
-    let more_right = if cols.end < g.joints.len() {
-        " ▶"
-    } else {
-        ""
-    };
-    let more_below = if r0 > 0 { " ▼ lower zones" } else { "" };
-    let more_above = if rows.end < g.zones.len() {
-        " ▲ higher zones"
-    } else {
-        ""
-    };
+    // ◀ and ▶ at the edges when joints are off screen; ▲ ▼ for zones.
+    let width = area.width as usize;
+    let mut mid = format!("{:>3} left bank → right bank", "");
+    if rows.end < g.zones.len() {
+        mid.push_str(" ▲ higher zones");
+    }
+    if r0 > 0 {
+        mid.push_str(" ▼ lower zones");
+    }
+    let mid: String = mid.chars().take(width.saturating_sub(2)).collect();
+    let fill = width.saturating_sub(2 + mid.chars().count());
     lines.push(Line::from(Span::styled(
         format!(
-            "{:>4} {more_left}left bank → right bank{more_right}{more_above}{more_below}",
-            ""
+            "{}{mid}{}{}",
+            if c0 > 0 { "◀" } else { " " },
+            " ".repeat(fill),
+            if cols.end < g.joints.len() {
+                "▶"
+            } else {
+                " "
+            }
         ),
         theme.dim(),
     )));
