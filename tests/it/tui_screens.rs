@@ -354,3 +354,50 @@ fn whatif_says_when_supercooling_cannot_reach_the_zone() {
     let text = screen(&s.app, 80, 24);
     assert!(text.contains("supercooled"), "{text}");
 }
+
+#[test]
+fn every_legend_state_has_its_cell_symbol_and_colour() {
+    use groutready::tui::grid::{CellState, Grid};
+    let p = common::small_plan();
+    let mut data = RunData::load(&p.out).unwrap();
+    let count = |g: &Grid| CellState::ALL.map(|s| g.count(s));
+    // As planned: 8 flagged, 4 groutable, 4 grouted, zones 5–7 not poured.
+    assert_eq!(count(&data.grid), [8, 0, 4, 4, 0, 0, 12]);
+    // A grouted zone that re-opened, a marginal one, and a later as-of date
+    // by which zones 5–7 are poured but beyond the plan.
+    let plan = &mut data.plan;
+    plan.zones.iter_mut().find(|z| z.history).unwrap().reopened = Some(common::date(2024, 6, 20));
+    plan.zones
+        .iter_mut()
+        .find(|z| !z.history && z.verdict == Verdict::Groutable)
+        .unwrap()
+        .verdict = Verdict::Marginal;
+    plan.as_of = common::date(2025, 6, 1);
+    data.grid = Grid::new(&data.layout, &data.schedules, &data.plan);
+    assert_eq!(count(&data.grid), [8, 1, 3, 3, 1, 12, 0]);
+    let s = Session::open(data, true);
+    let t = draw(&s.app, 80, 24);
+    let text = screen(&s.app, 80, 24);
+    let buf = t.backend().buffer();
+    // Not poured is drawn in the first grid (zones 5–7 before June 2024).
+    for state in CellState::ALL
+        .into_iter()
+        .filter(|&s| s != CellState::NotPoured)
+    {
+        let sym = state.symbol();
+        // The first cell of the grid (rows 3–17: not the header or legend).
+        let (x, y) = (3..18u16)
+            .flat_map(|y| (5..80u16).map(move |x| (x, y)))
+            .find(|&(x, y)| buf[(x, y)].symbol() == sym)
+            .unwrap_or_else(|| panic!("{sym} missing:\n{text}"));
+        let want = match state {
+            CellState::NotGroutable => Color::Red,
+            CellState::Marginal => Color::Yellow,
+            CellState::Groutable => Color::Green,
+            CellState::Grouted => Color::Blue,
+            CellState::Reopened => Color::Magenta,
+            CellState::Later | CellState::NotPoured => Color::DarkGray,
+        };
+        assert_eq!(buf[(x, y)].fg, want, "{sym} at {x},{y}");
+    }
+}

@@ -245,6 +245,19 @@ fn tui_reports_bad_targets_before_taking_the_terminal() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("--as-of applies to a scene"), "{err}");
+    // Without a terminal it says so (where the tests themselves have no
+    // terminal to take over, as under CI).
+    if std::fs::File::open("/dev/tty").is_err() {
+        let o = common::bin()
+            .arg("tui")
+            .arg(&p.out)
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("the terminal UI needs a terminal"), "{err}");
+    }
     let o = common::bin()
         .args(["tui", "models/no_such_scene.toml"])
         .output()
