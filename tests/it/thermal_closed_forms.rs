@@ -211,7 +211,7 @@ fn slab_series(bi: f64, fo: f64) -> f64 {
     for n in 0..200 {
         let (mut lo, mut hi) = (
             n as f64 * std::f64::consts::PI,
-            n as f64 * std::f64::consts::PI + 1.5707963267948966,
+            n as f64 * std::f64::consts::PI + std::f64::consts::FRAC_PI_2,
         );
         hi -= 1e-15;
         for _ in 0..200 {

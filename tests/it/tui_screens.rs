@@ -401,3 +401,35 @@ fn every_legend_state_has_its_cell_symbol_and_colour() {
         assert_eq!(buf[(x, y)].fg, want, "{sym} at {x},{y}");
     }
 }
+
+#[test]
+fn whatif_fields_stay_within_the_site_limits() {
+    let mut s = session(None, true);
+    open(&mut s, 1, 4);
+    keys(&mut s, "w");
+    for _ in 0..20 {
+        key(&mut s, KeyCode::Right);
+    }
+    let form = |s: &Session| s.app.zone.as_ref().unwrap().whatif.clone().unwrap();
+    // The chillers' limit, on the step grid.
+    assert_eq!(form(&s).supercool_c, 3.0);
+    keys(&mut s, "-");
+    assert_eq!(form(&s).supercool_c, 2.75);
+    for _ in 0..20 {
+        key(&mut s, KeyCode::Left);
+    }
+    assert_eq!(form(&s).supercool_c, 0.0);
+    // The date: a day per arrow, a week per page, never before the as-of date.
+    keys(&mut s, "j");
+    key(&mut s, KeyCode::Right);
+    key(&mut s, KeyCode::PageUp);
+    assert_eq!(form(&s).date, common::date(2024, 9, 21));
+    for _ in 0..30 {
+        key(&mut s, KeyCode::PageDown);
+    }
+    assert_eq!(form(&s).date, common::date(2024, 6, 1));
+    // Nothing to save before a run.
+    keys(&mut s, "s");
+    let msg = form(&s).message.unwrap();
+    assert!(msg.contains("nothing to save yet"), "{msg}");
+}
