@@ -433,3 +433,35 @@ fn whatif_fields_stay_within_the_site_limits() {
     let msg = form(&s).message.unwrap();
     assert!(msg.contains("nothing to save yet"), "{msg}");
 }
+
+#[test]
+fn joint_meter_readings_are_drawn_on_the_zone_chart() {
+    use groutready::planner::MeterComparison;
+    let p = common::small_plan();
+    let mut data = RunData::load(&p.out).unwrap();
+    data.plan.meters = [(7, 1, 0.40, 0.52), (8, 15, 1.20, 1.28)]
+        .into_iter()
+        .map(|(m, d, measured, predicted)| MeterComparison {
+            joint: 1,
+            zone: 4,
+            point: "center".into(),
+            date: common::date(2024, m, d),
+            measured_mm: measured,
+            predicted_mm: Some(predicted),
+        })
+        .collect();
+    let mut s = Session::open(data, false);
+    open(&mut s, 1, 4);
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("█meter"), "{text}");
+    assert!(text.contains("2 meter readings"), "{text}");
+    assert!(text.contains("+0.10 mm"), "{text}");
+    // Two readings drawn inside the aperture chart (left of the side panel).
+    let drawn: usize = text
+        .lines()
+        .skip(4)
+        .take(8)
+        .map(|l| l.chars().take(42).filter(|&c| c == '█').count())
+        .sum();
+    assert_eq!(drawn, 2, "{text}");
+}

@@ -19,6 +19,8 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     pub style: Style,
     pub marker: Marker,
+    /// points only (joint-meter readings), not a line
+    pub scatter: bool,
 }
 
 /// x of a date on the chart: days since `t0`.
@@ -39,7 +41,8 @@ pub fn marker(theme: &Theme, i: usize) -> Marker {
     if theme.color {
         Marker::Braille
     } else {
-        [Marker::Dot, Marker::Braille, Marker::Block, Marker::Braille][i % 4]
+        // Block (█) is left to the joint meters' readings.
+        [Marker::Dot, Marker::Braille, Marker::Bar, Marker::Braille][i % 4]
     }
 }
 
@@ -54,12 +57,13 @@ fn title_line(
 ) -> Line<'static> {
     let mut spans = vec![Span::styled(format!(" {title} "), theme.title())];
     for s in series {
-        let glyph = if theme.color {
+        let glyph = if theme.color && !s.scatter {
             String::new()
         } else {
             match s.marker {
                 Marker::Dot => "•".into(),
                 Marker::Block => "█".into(),
+                Marker::Bar => "▄".into(),
                 _ => "⣿".into(),
             }
         };
@@ -108,17 +112,8 @@ pub fn render(
     };
     let limit_pts = limit.map(|(_, v)| vec![(0.0, v), (xmax, v)]);
     let mark_pts = mark.map(|d| vec![(x(t0, d), lo), (x(t0, d), hi)]);
-    let mut datasets: Vec<Dataset> = series
-        .iter()
-        .map(|s| {
-            Dataset::default()
-                .name(s.name)
-                .marker(s.marker)
-                .graph_type(GraphType::Line)
-                .style(s.style)
-                .data(&s.points)
-        })
-        .collect();
+    // Limit and date lines behind the curves, meter readings on top.
+    let mut datasets: Vec<Dataset> = Vec::new();
     if let (Some((name, _)), Some(p)) = (limit, &limit_pts) {
         datasets.push(
             Dataset::default()
@@ -136,6 +131,21 @@ pub fn render(
                 .graph_type(GraphType::Line)
                 .style(theme.marker())
                 .data(p),
+        );
+    }
+    let lines = series.iter().filter(|s| !s.scatter);
+    for s in lines.chain(series.iter().filter(|s| s.scatter)) {
+        datasets.push(
+            Dataset::default()
+                .name(s.name)
+                .marker(s.marker)
+                .graph_type(if s.scatter {
+                    GraphType::Scatter
+                } else {
+                    GraphType::Line
+                })
+                .style(s.style)
+                .data(&s.points),
         );
     }
     let mid = t0 + chrono::Duration::days((xmax / 2.0) as i64);

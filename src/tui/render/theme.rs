@@ -78,6 +78,11 @@ impl Theme {
         self.fg(Color::Red)
     }
 
+    /// Joint-meter readings on the aperture chart.
+    pub fn meter(&self) -> Style {
+        self.fg(Color::White).add_modifier(Modifier::BOLD)
+    }
+
     pub fn marker(&self) -> Style {
         self.fg(Color::Yellow)
     }

@@ -5,6 +5,7 @@
 use chrono::NaiveDate;
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
 
@@ -93,6 +94,7 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             points: chart::points(h, t0, v),
             style: theme.series(i),
             marker: chart::marker(theme, i),
+            scatter: false,
         })
         .collect();
     let point = data.plan.settings.aperture_point;
@@ -108,6 +110,24 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             points: chart::points(&r.history, t0, v),
             style: theme.series(3),
             marker: chart::marker(theme, 3),
+            scatter: false,
+        });
+    }
+    // The site's joint meters on this zone, as measured.
+    let meters: Vec<(f64, f64)> = data
+        .plan
+        .meters
+        .iter()
+        .filter(|m| (m.joint, m.zone) == (view.joint, view.zone))
+        .map(|m| (chart::x(t0, m.date), m.measured_mm))
+        .collect();
+    if !meters.is_empty() {
+        series.push(Series {
+            name: "meter",
+            points: meters,
+            style: theme.meter(),
+            marker: Marker::Block,
+            scatter: true,
         });
     }
     let s = &data.plan.settings;
@@ -133,6 +153,7 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
         points: chart::points(h, t0, &h.temperature),
         style: theme.series(1),
         marker: chart::marker(theme, 1),
+        scatter: false,
     }];
     if let Some(r) = result {
         temps.push(Series {
@@ -140,6 +161,7 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             points: chart::points(&r.history, t0, &r.history.temperature),
             style: theme.series(3),
             marker: chart::marker(theme, 3),
+            scatter: false,
         });
     }
     chart::render(
@@ -211,6 +233,27 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
                 theme.title(),
             )));
             lines.extend(rule_lines(r, theme));
+            let meters: Vec<_> = data
+                .plan
+                .meters
+                .iter()
+                .filter(|m| (m.joint, m.zone) == (view.joint, view.zone))
+                .collect();
+            if !meters.is_empty() {
+                let errors: Vec<f64> = meters
+                    .iter()
+                    .filter_map(|m| m.predicted_mm.map(|p| p - m.measured_mm))
+                    .collect();
+                let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+                lines.push(Line::from(Span::styled(
+                    format!(
+                        "█ {} meter readings, predicted − measured {:+.2} mm on average",
+                        meters.len(),
+                        mean
+                    ),
+                    theme.meter(),
+                )));
+            }
             if let Some(d) = r.reopened {
                 lines.push(Line::from(Span::styled(
                     format!("! re-opened {d}"),
