@@ -35,24 +35,8 @@ enum Command {
     Plan {
         /// Scene file (default: the bundled demo arch dam, models/demo_arch.toml).
         scene: Option<PathBuf>,
-        /// Schedules folder (default: the scene's `schedules`).
-        #[arg(long)]
-        schedules: Option<PathBuf>,
-        /// Run folder to write (default: runs/<scene name>); its checkpoints
-        /// are reused when the scene is unchanged.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Zones planned before this date (YYYY-MM-DD) are history (default:
-        /// the day after the last zone marked done in grouting.csv, else today).
-        #[arg(long, value_parser = parse_date)]
-        as_of: Option<chrono::NaiveDate>,
-        /// Plan only the zones due within this many days of the as-of date
-        /// (default: the scene's planner.horizon_days, else all).
-        #[arg(long)]
-        horizon_days: Option<u32>,
-        /// Simulate from day 0 even if the run folder has checkpoints.
-        #[arg(long)]
-        from_scratch: bool,
+        #[command(flatten)]
+        args: PlanArgs,
         /// Exit with code 3 when any zone still to grout is not groutable.
         #[arg(long)]
         fail_on_flag: bool,
@@ -65,21 +49,8 @@ enum Command {
         /// first (default: the bundled demo, planned into runs/demo_arch
         /// unless that folder's plan is up to date).
         target: Option<PathBuf>,
-        /// Schedules folder of a scene (default: the scene's `schedules`).
-        #[arg(long)]
-        schedules: Option<PathBuf>,
-        /// Run folder to plan into (default: runs/<scene name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// As for `plan`.
-        #[arg(long, value_parser = parse_date)]
-        as_of: Option<chrono::NaiveDate>,
-        /// As for `plan`.
-        #[arg(long)]
-        horizon_days: Option<u32>,
-        /// Plan again from day 0 even if the run folder is up to date.
-        #[arg(long)]
-        from_scratch: bool,
+        #[command(flatten)]
+        args: PlanArgs,
     },
     /// Benchmarks: what accuracy costs in time.
     Study {
@@ -91,6 +62,40 @@ enum Command {
         #[command(subcommand)]
         what: ScheduleCommand,
     },
+}
+
+/// What a plan is made of, for `plan` and for `tui` given a scene.
+#[derive(clap::Args)]
+struct PlanArgs {
+    /// Schedules folder (default: the scene's `schedules`).
+    #[arg(long)]
+    schedules: Option<PathBuf>,
+    /// Run folder to write (default: runs/<scene name>); its checkpoints
+    /// are reused when the scene is unchanged.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Zones planned before this date (YYYY-MM-DD) are history (default:
+    /// the day after the last zone marked done in grouting.csv, else today).
+    #[arg(long, value_parser = parse_date)]
+    as_of: Option<chrono::NaiveDate>,
+    /// Plan only the zones due within this many days of the as-of date
+    /// (default: the scene's planner.horizon_days, else all).
+    #[arg(long)]
+    horizon_days: Option<u32>,
+    /// Simulate from day 0 even if the run folder has checkpoints (`tui`:
+    /// plan again even if the run folder's plan is up to date).
+    #[arg(long)]
+    from_scratch: bool,
+}
+
+impl PlanArgs {
+    fn request(&self) -> app::plan::PlanRequest {
+        app::plan::PlanRequest {
+            as_of: self.as_of,
+            horizon_days: self.horizon_days,
+            from_scratch: self.from_scratch,
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -213,16 +218,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         }
         Command::Plan {
             scene,
-            schedules,
-            out,
-            as_of,
-            horizon_days,
-            from_scratch,
+            args,
             fail_on_flag,
         } => {
             let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
-            let out = out.unwrap_or_else(|| default_out(&scene));
-            let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+            let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
+            let inputs = app::load_inputs(&scene, args.schedules.as_deref())?;
             eprintln!(
                 "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
                 inputs.scene.name,
@@ -231,11 +232,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 inputs.schedules.grouting.len(),
                 inputs.scene.effects
             );
-            let request = app::plan::PlanRequest {
-                as_of,
-                horizon_days,
-                from_scratch,
-            };
+            let request = args.request();
             let bar = groutready::progress::bar("simulating");
             let summary = app::plan::plan(&inputs, &out, &request, &mut |p| match p {
                 groutready::planner::Progress::Baseline { day, end } => {
@@ -276,14 +273,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 0
             })
         }
-        Command::Tui {
-            target,
-            schedules,
-            out,
-            as_of,
-            horizon_days,
-            from_scratch,
-        } => tui(target, schedules, out, as_of, horizon_days, from_scratch),
+        Command::Tui { target, args } => tui(target, args),
         Command::Study {
             what: StudyCommand::Restart { scene },
         } => {
@@ -342,24 +332,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
     }
 }
 
-fn tui(
-    target: Option<PathBuf>,
-    schedules: Option<PathBuf>,
-    out: Option<PathBuf>,
-    as_of: Option<chrono::NaiveDate>,
-    horizon_days: Option<u32>,
-    from_scratch: bool,
-) -> anyhow::Result<u8> {
+fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
     use groutready::tui::{self, RunData, Session};
     let color = tui::color_wanted();
     let target = target.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let session = if target.is_dir() {
         let scene_only = [
-            ("--schedules", schedules.is_some()),
-            ("--out", out.is_some()),
-            ("--as-of", as_of.is_some()),
-            ("--horizon-days", horizon_days.is_some()),
-            ("--from-scratch", from_scratch),
+            ("--schedules", args.schedules.is_some()),
+            ("--out", args.out.is_some()),
+            ("--as-of", args.as_of.is_some()),
+            ("--horizon-days", args.horizon_days.is_some()),
+            ("--from-scratch", args.from_scratch),
         ];
         if let Some((flag, _)) = scene_only.iter().find(|f| f.1) {
             anyhow::bail!(
@@ -371,14 +354,15 @@ fn tui(
             RunData::load(&target).with_context(|| format!("opening {}", target.display()))?;
         Session::open(data, color)
     } else {
-        let out = out.unwrap_or_else(|| default_out(&target));
+        let out = args.out.clone().unwrap_or_else(|| default_out(&target));
         // Bad input is reported here, before the terminal is taken over.
-        let inputs = app::load_inputs(&target, schedules.as_deref())?;
+        let inputs = app::load_inputs(&target, args.schedules.as_deref())?;
         let today = chrono::Local::now().date_naive();
-        let as_of = as_of
+        let as_of = args
+            .as_of
             .unwrap_or_else(|| groutready::planner::plan::default_as_of(&inputs.schedules, today));
-        let horizon = horizon_days.or(inputs.scene.planner.horizon_days);
-        let current = !from_scratch
+        let horizon = args.horizon_days.or(inputs.scene.planner.horizon_days);
+        let current = !args.from_scratch
             && app::restart::up_to_date(&out, &inputs.scene, &inputs.schedules, as_of, horizon);
         if current {
             let data = RunData::load(&out).with_context(|| format!("opening {}", out.display()))?;
@@ -391,8 +375,7 @@ fn tui(
         } else {
             let request = app::plan::PlanRequest {
                 as_of: Some(as_of),
-                horizon_days,
-                from_scratch,
+                ..args.request()
             };
             Session::plan(inputs, out, request, color)
         }

@@ -135,15 +135,11 @@ pub fn save(
     previous: Option<&Path>,
 ) -> Result<usize, CheckpointError> {
     let dir = staging.join(RESTART_DIR);
-    let io = |path: &Path| {
-        let path = path.display().to_string();
-        move |source| CheckpointError::Io { path, source }
-    };
-    std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
     let inputs = dir.join(INPUTS);
-    schedule::write_dir(schedules, &inputs).map_err(io(&inputs))?;
+    schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
     std::fs::write(dir.join(FINGERPRINT), fingerprint(scene))
-        .map_err(io(&dir.join(FINGERPRINT)))?;
+        .map_err(io_err(&dir.join(FINGERPRINT)))?;
     write_file(&dir.join(HISTORY), history, "history")?;
     let mut n = 0;
     let mut have: Vec<f64> = Vec::new();
@@ -161,7 +157,7 @@ pub fn save(
             // Older checkpoints stay valid: the runs agree before the restart.
             if day >= keep_from && day < first_new && !have.contains(&day) {
                 let to = dir.join(ck_name(day));
-                std::fs::copy(&path, &to).map_err(io(&to))?;
+                std::fs::copy(&path, &to).map_err(io_err(&to))?;
                 n += 1;
             }
         }

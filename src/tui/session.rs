@@ -114,17 +114,6 @@ impl Session {
         true
     }
 
-    /// Waits for the next job report (at most `timeout`) and applies it.
-    pub fn wait_event(&mut self, timeout: Duration) -> bool {
-        match self.rx.recv_timeout(timeout) {
-            Ok(t) => {
-                self.deliver(t);
-                true
-            }
-            Err(_) => false,
-        }
-    }
-
     fn busy(&self) -> bool {
         let planning = self
             .app

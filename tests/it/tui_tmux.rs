@@ -110,6 +110,19 @@ fn line(args: &str) -> String {
     )
 }
 
+/// After the TUI: cooked mode again (`stty` says `icanon`, not `-icanon`)
+/// and the shell's own screen, not the alternate one.
+fn assert_terminal_restored(s: &str) {
+    assert!(
+        s.contains("icanon") && !s.contains("-icanon"),
+        "the terminal is left in raw mode:\n{s}"
+    );
+    assert!(
+        !s.contains("1 Overview"),
+        "the alternate screen is left:\n{s}"
+    );
+}
+
 fn quote(p: &Path) -> String {
     format!("'{}'", p.display())
 }
@@ -157,14 +170,7 @@ fn tui_in_tmux_shows_the_demo_a_flagged_zone_and_exits_cleanly() {
     t.keys(&["q"]);
     let s = t.wait_for("the exit", 10, |s| s.contains("tui exited"));
     assert!(s.contains("tui exited 0"), "{s}");
-    assert!(
-        s.contains("icanon") && !s.contains("-icanon"),
-        "the terminal is left in raw mode:\n{s}"
-    );
-    assert!(
-        !s.contains("1 Overview"),
-        "the alternate screen is left:\n{s}"
-    );
+    assert_terminal_restored(&s);
 }
 
 #[test]
@@ -215,54 +221,38 @@ fn a_panic_in_the_tui_restores_the_terminal() {
     let s = t.wait_for("the exit", 30, |s| s.contains("tui exited"));
     assert!(s.contains("tui exited 101"), "{s}");
     assert!(s.contains("panicking after the first frame"), "{s}");
-    assert!(
-        s.contains("icanon") && !s.contains("-icanon"),
-        "the terminal is left in raw mode:\n{s}"
-    );
-    assert!(
-        !s.contains("1 Overview"),
-        "the alternate screen is left:\n{s}"
-    );
+    assert_terminal_restored(&s);
 }
 
 #[test]
 fn tui_reports_bad_targets_before_taking_the_terminal() {
+    // `groutready tui ARGS` with no input: it must fail with exit 1; its stderr.
+    let fails = |args: &[&std::ffi::OsStr]| -> String {
+        let o = common::bin()
+            .arg("tui")
+            .args(args)
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        err
+    };
     let tmp = tempfile::tempdir().unwrap();
-    let o = common::bin().arg("tui").arg(tmp.path()).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = fails(&[tmp.path().as_os_str()]);
     assert!(
         err.contains("is not a planned run folder") && err.contains("restart/scene.json"),
         "{err}"
     );
     let p = common::small_plan();
-    let o = common::bin()
-        .arg("tui")
-        .arg(&p.out)
-        .args(["--as-of", "2024-06-01"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = fails(&[p.out.as_os_str(), "--as-of".as_ref(), "2024-06-01".as_ref()]);
     assert!(err.contains("--as-of applies to a scene"), "{err}");
     // Without a terminal it says so (where the tests themselves have no
     // terminal to take over, as under CI).
     if std::fs::File::open("/dev/tty").is_err() {
-        let o = common::bin()
-            .arg("tui")
-            .arg(&p.out)
-            .stdin(std::process::Stdio::null())
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
+        let err = fails(&[p.out.as_os_str()]);
         assert!(err.contains("the terminal UI needs a terminal"), "{err}");
     }
-    let o = common::bin()
-        .args(["tui", "models/no_such_scene.toml"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = fails(&["models/no_such_scene.toml".as_ref()]);
     assert!(err.contains("no_such_scene.toml"), "{err}");
 }
