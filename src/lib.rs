@@ -22,3 +22,4 @@ pub mod sim;
 pub mod study;
 pub mod thermal;
 pub mod tui;
+pub mod vocab;

@@ -92,6 +92,8 @@ impl PlanArgs {
     fn request(&self) -> app::plan::PlanRequest {
         app::plan::PlanRequest {
             as_of: self.as_of,
+            // The binary's clock decides "today"; the library reads none.
+            today: chrono::Local::now().date_naive(),
             horizon_days: self.horizon_days,
             from_scratch: self.from_scratch,
         }
@@ -245,8 +247,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             .with_context(|| format!("planning {}", scene.display()))?;
             bar.finish_and_clear();
             print!("{}", groutready::report::readiness_table(&summary.plan));
-            for (j, z, why) in &summary.newly_flagged {
-                println!("note: joint {j} zone {z} is no longer groutable once the remedies are applied: {why}");
+            for (zone, why) in &summary.newly_flagged {
+                println!(
+                    "note: {zone} is no longer groutable once the remedies are applied: {why}"
+                );
             }
             let st = &summary.plan.stats;
             println!(
@@ -357,14 +361,8 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
         let out = args.out.clone().unwrap_or_else(|| default_out(&target));
         // Bad input is reported here, before the terminal is taken over.
         let inputs = app::load_inputs(&target, args.schedules.as_deref())?;
-        let today = chrono::Local::now().date_naive();
-        let as_of = args
-            .as_of
-            .unwrap_or_else(|| groutready::planner::plan::default_as_of(&inputs.schedules, today));
-        let horizon = args.horizon_days.or(inputs.scene.planner.horizon_days);
-        let current = !args.from_scratch
-            && app::restart::up_to_date(&out, &inputs.scene, &inputs.schedules, as_of, horizon);
-        if current {
+        let request = args.request();
+        if app::plan::is_current(&inputs, &out, &request) {
             let data = RunData::load(&out).with_context(|| format!("opening {}", out.display()))?;
             let mut s = Session::open(data, color);
             s.app.status = Some(format!(
@@ -373,10 +371,6 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
             ));
             s
         } else {
-            let request = app::plan::PlanRequest {
-                as_of: Some(as_of),
-                ..args.request()
-            };
             Session::plan(inputs, out, request, color)
         }
     };

@@ -11,6 +11,7 @@ use crate::output::{self, RunDir};
 use crate::scene::Scene;
 use crate::schedule::{self, Schedules};
 use crate::sim::{RunStats, Simulation};
+use crate::vocab::Day;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
@@ -112,7 +113,17 @@ pub fn run(
     let staging = RunDir::create(out).map_err(io_err(out))?;
     let fields = staging.path().join("fields");
     std::fs::create_dir_all(&fields).map_err(io_err(&fields))?;
-    let stats = sim.run(Some(&fields), progress)?;
+    let mut written: Vec<(f64, String)> = Vec::new();
+    let mesh = &inputs.mesh;
+    let mut sink = |snap: &crate::sim::Snapshot| -> std::io::Result<()> {
+        let name = format!("fields_{}.vtu", snap.date);
+        let path = fields.join(&name);
+        output::snapshot::write(&path, mesh, snap)
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+        written.push((snap.day.t(), name));
+        Ok(())
+    };
+    let stats = sim.run(Some(&mut sink), progress)?;
 
     let temps = staging.path().join("temperatures.csv");
     let temperature_rows = if sim.thermal.is_some() {
@@ -126,27 +137,20 @@ pub fn run(
     } else {
         let path = staging.path().join("apertures.csv");
         let epoch = inputs.scene.epoch;
-        let mut extra: std::collections::BTreeSet<i64> = inputs
+        let mut extra: std::collections::BTreeSet<Day> = inputs
             .schedules
             .grouting
             .iter()
-            .map(|g| (g.planned - epoch).num_days())
+            .map(|g| epoch.day(g.planned))
             .collect();
-        extra.extend(
-            inputs
-                .scene
-                .output
-                .snapshots
-                .iter()
-                .map(|d| (*d - epoch).num_days()),
-        );
+        extra.extend(inputs.scene.output.snapshots.iter().map(|d| epoch.day(*d)));
         output::apertures::write(&path, epoch, &sim.joint_records, &extra).map_err(io_err(&path))?
     };
     let pvd = fields.join("fields.pvd");
-    mesh::vtu::write_pvd(&pvd, &sim.snapshots).map_err(io_err(&pvd))?;
+    mesh::vtu::write_pvd(&pvd, &written).map_err(io_err(&pvd))?;
     let summary = staging.path().join("run.txt");
     std::fs::write(&summary, run_text(inputs, &stats)).map_err(io_err(&summary))?;
-    let snapshots = sim.snapshots.len();
+    let snapshots = written.len();
     let out = staging.commit().map_err(io_err(out))?;
     Ok(RunSummary {
         out,

@@ -10,6 +10,7 @@ use chrono::NaiveDate;
 use crate::output::{self, RunDir};
 use crate::planner::{self, Plan, PlanOptions, Progress};
 use crate::schedule;
+use crate::vocab::ZoneId;
 
 use super::restart;
 use super::{io_err, run_text, AppError, Inputs};
@@ -17,11 +18,35 @@ use super::{io_err, run_text, AppError, Inputs};
 /// Options of one plan.
 #[derive(Debug, Clone, Default)]
 pub struct PlanRequest {
+    /// the as-of date (default: [`planner::plan::default_as_of`] with `today`)
     pub as_of: Option<NaiveDate>,
+    /// the caller's clock: the as-of date when the schedules mark no zone
+    /// done and `as_of` is not given (the library reads no clock)
+    pub today: NaiveDate,
     /// overrides the scene's `planner.horizon_days`
     pub horizon_days: Option<u32>,
     /// ignore the run folder's checkpoints
     pub from_scratch: bool,
+}
+
+impl PlanRequest {
+    /// The planner's options for `inputs`: the as-of date and horizon.
+    pub fn options(&self, inputs: &Inputs) -> PlanOptions {
+        PlanOptions {
+            as_of: self
+                .as_of
+                .unwrap_or_else(|| planner::plan::default_as_of(&inputs.schedules, self.today)),
+            horizon_days: self.horizon_days.or(inputs.scene.planner.horizon_days),
+        }
+    }
+}
+
+/// Whether `out` already holds this plan (same scene, schedules, meters,
+/// as-of date, horizon and settings): opening it shows what planning again
+/// would. Never when the request plans from scratch.
+pub fn is_current(inputs: &Inputs, out: &Path, request: &PlanRequest) -> bool {
+    let options = request.options(inputs);
+    !request.from_scratch && restart::up_to_date(out, &inputs.scene, &inputs.schedules, &options)
 }
 
 /// A finished plan and where it was written.
@@ -31,7 +56,7 @@ pub struct PlanSummary {
     /// remedied schedules written to `out/remedied`
     pub remedied: bool,
     /// zones groutable as scheduled that the remedies make not groutable
-    pub newly_flagged: Vec<(u32, u32, String)>,
+    pub newly_flagged: Vec<(ZoneId, String)>,
     pub checkpoints_kept: usize,
 }
 
@@ -56,34 +81,15 @@ pub fn plan(
             },
         ));
     }
-    let options = PlanOptions {
-        as_of: request.as_of,
-        horizon_days: request.horizon_days.or(scene.planner.horizon_days),
-    };
-    // The restart may not be later than this plan's own end.
+    let options = request.options(inputs);
     let epoch = scene.epoch;
-    let as_of = options.as_of.unwrap_or_else(|| {
-        planner::plan::default_as_of(&inputs.schedules, chrono::Local::now().date_naive())
-    });
-    let end = inputs
-        .schedules
-        .grouting
-        .iter()
-        .map(|g| (g.planned - epoch).num_days() as f64)
-        .filter(|&d| {
-            options
-                .horizon_days
-                .is_none_or(|h| d <= (as_of - epoch).num_days() as f64 + h as f64)
-        })
-        .fold((as_of - epoch).num_days() as f64, f64::max);
+    let as_of = options.as_of;
+    // The restart may not be later than this plan's own end.
+    let end = options.end_day(epoch, &inputs.schedules);
     let previous = if request.from_scratch {
         None
     } else {
         restart::find(out, scene, &inputs.schedules, end)?
-    };
-    let options = PlanOptions {
-        as_of: Some(as_of),
-        ..options
     };
     let prev_dir = previous.as_ref().map(|p| p.dir.clone());
     let out_plan = planner::plan(
@@ -91,11 +97,7 @@ pub fn plan(
         &inputs.mesh,
         &inputs.schedules,
         &options,
-        previous.map(|p| planner::plan::Restart {
-            checkpoint: p.checkpoint,
-            history: p.history,
-            older: p.older,
-        }),
+        previous.map(|p| p.restart),
         progress,
     )?;
 
@@ -113,7 +115,7 @@ pub fn plan(
             .schedules
             .grouting
             .iter()
-            .map(|g| (g.planned - epoch).num_days())
+            .map(|g| epoch.day(g.planned))
             .collect();
         output::apertures::write(&p, epoch, &h.joint_records, &extra).map_err(io_err(&p))?;
     }
@@ -121,7 +123,9 @@ pub fn plan(
         let p = dir.join(REMEDIED_DIR);
         schedule::write_dir(s, &p).map_err(io_err(&p))?;
     }
-    let keep_from = (as_of - epoch).num_days() as f64 - 2.0 * scene.planner.checkpoint_days as f64;
+    let keep_from = epoch
+        .day(as_of)
+        .plus(-2 * scene.planner.checkpoint_days as i64);
     let checkpoints_kept = restart::save(
         dir,
         scene,
@@ -141,7 +145,7 @@ pub fn plan(
         newly_flagged: out_plan
             .newly_flagged
             .iter()
-            .map(|z| (z.joint, z.zone, z.reasons()))
+            .map(|z| (z.zone_id(), z.reasons()))
             .collect(),
         plan: out_plan.plan,
         checkpoints_kept,

@@ -16,11 +16,13 @@ use std::path::{Path, PathBuf};
 use chrono::NaiveDate;
 
 use crate::planner::edit::first_change;
-use crate::planner::Plan;
+use crate::planner::plan::Restart;
+use crate::planner::{Plan, PlanOptions};
 use crate::scene::Scene;
 use crate::schedule::{self, Schedules};
 use crate::sim::checkpoint::{read_file, write_file, CheckpointError};
 use crate::sim::{Checkpoint, History};
+use crate::vocab::{Day, ZoneId, ZonePoint};
 
 pub const RESTART_DIR: &str = "restart";
 const FINGERPRINT: &str = "fingerprint.txt";
@@ -44,24 +46,23 @@ pub fn fingerprint(scene: &Scene) -> String {
     format!("groutready {} scene {h:016x}\n", env!("CARGO_PKG_VERSION"))
 }
 
-fn ck_name(day: f64) -> String {
-    format!("ck-{:05}.bin", day as i64)
+fn ck_name(day: Day) -> String {
+    format!("ck-{:05}.bin", day.0)
 }
 
-fn ck_day(name: &str) -> Option<f64> {
+fn ck_day(name: &str) -> Option<Day> {
     name.strip_prefix("ck-")?
         .strip_suffix(".bin")?
         .parse::<i64>()
         .ok()
-        .map(|d| d as f64)
+        .map(Day)
 }
 
 /// A restart found in an earlier run folder.
 pub struct Previous {
-    pub checkpoint: Checkpoint,
-    /// the folder's earlier checkpoints (remedy searches restart from them)
-    pub older: Vec<Checkpoint>,
-    pub history: History,
+    /// the checkpoint, the history before it and the folder's earlier
+    /// checkpoints (remedy searches restart from them)
+    pub restart: Restart,
     /// the first date the schedules differ from the earlier run's (None: same)
     pub first_change: Option<chrono::NaiveDate>,
     pub dir: PathBuf,
@@ -73,7 +74,7 @@ pub fn find(
     run_dir: &Path,
     scene: &Scene,
     schedules: &Schedules,
-    end_day: f64,
+    end_day: Day,
 ) -> Result<Option<Previous>, CheckpointError> {
     let dir = run_dir.join(RESTART_DIR);
     match std::fs::read_to_string(dir.join(FINGERPRINT)) {
@@ -84,15 +85,12 @@ pub fn find(
         return Ok(None);
     };
     let first = first_change(&old, schedules);
-    let limit = first
-        .map(|d| (d - scene.epoch).num_days() as f64)
-        .unwrap_or(f64::INFINITY)
-        .min(end_day);
-    let mut usable: Vec<(f64, PathBuf)> = list(&dir)?
+    let limit = first.map_or(end_day, |d| scene.epoch.day(d).min(end_day));
+    let mut usable: Vec<(Day, PathBuf)> = list(&dir)?
         .into_iter()
         .filter(|&(d, _)| d <= limit)
         .collect();
-    usable.sort_by(|a, b| a.0.total_cmp(&b.0));
+    usable.sort_by_key(|u| u.0);
     let Some((_, path)) = usable.pop() else {
         return Ok(None);
     };
@@ -101,15 +99,17 @@ pub fn find(
         .map(|(_, p)| read_file(p))
         .collect::<Result<_, _>>()?;
     Ok(Some(Previous {
-        checkpoint: read_file(&path)?,
-        older,
-        history: read_file(&dir.join(HISTORY))?,
+        restart: Restart {
+            checkpoint: read_file(&path)?,
+            older,
+            history: read_file(&dir.join(HISTORY))?,
+        },
         first_change: first,
         dir,
     }))
 }
 
-fn list(dir: &Path) -> Result<Vec<(f64, PathBuf)>, CheckpointError> {
+fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
     let rd = std::fs::read_dir(dir).map_err(|source| CheckpointError::Io {
         path: dir.display().to_string(),
         source,
@@ -131,7 +131,7 @@ pub fn save(
     schedules: &Schedules,
     history: &History,
     checkpoints: &[Checkpoint],
-    keep_from: f64,
+    keep_from: Day,
     previous: Option<&Path>,
 ) -> Result<usize, CheckpointError> {
     let dir = staging.join(RESTART_DIR);
@@ -142,20 +142,18 @@ pub fn save(
         .map_err(io_err(&dir.join(FINGERPRINT)))?;
     write_file(&dir.join(HISTORY), history, "history")?;
     let mut n = 0;
-    let mut have: Vec<f64> = Vec::new();
+    let mut have: Vec<Day> = Vec::new();
     for ck in checkpoints.iter().filter(|c| c.day >= keep_from) {
         write_file(&dir.join(ck_name(ck.day)), ck, "checkpoint")?;
         have.push(ck.day);
         n += 1;
     }
     if let Some(prev) = previous {
-        let first_new = checkpoints
-            .iter()
-            .map(|c| c.day)
-            .fold(f64::INFINITY, f64::min);
+        let first_new = checkpoints.iter().map(|c| c.day).min();
         for (day, path) in list(prev)? {
             // Older checkpoints stay valid: the runs agree before the restart.
-            if day >= keep_from && day < first_new && !have.contains(&day) {
+            let before_new = first_new.is_none_or(|f| day < f);
+            if day >= keep_from && before_new && !have.contains(&day) {
                 let to = dir.join(ck_name(day));
                 std::fs::copy(&path, &to).map_err(io_err(&to))?;
                 n += 1;
@@ -248,7 +246,7 @@ pub fn open(dir: &Path) -> Result<Opened, CheckpointError> {
         .iter()
         .map(|(_, p)| read_file(p))
         .collect::<Result<_, _>>()?;
-    checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+    checkpoints.sort_by_key(|c| c.day);
     Ok(Opened {
         dir: dir.to_path_buf(),
         scene,
@@ -260,14 +258,8 @@ pub fn open(dir: &Path) -> Result<Opened, CheckpointError> {
 }
 
 /// Whether `dir` holds a plan of exactly this scene, these schedules and
-/// this as-of date and horizon: opening it shows what planning again would.
-pub fn up_to_date(
-    dir: &Path,
-    scene: &Scene,
-    schedules: &Schedules,
-    as_of: NaiveDate,
-    horizon_days: Option<u32>,
-) -> bool {
+/// these options: opening it shows what planning again would.
+pub fn up_to_date(dir: &Path, scene: &Scene, schedules: &Schedules, options: &PlanOptions) -> bool {
     let r = dir.join(RESTART_DIR);
     let same_fingerprint =
         std::fs::read_to_string(r.join(FINGERPRINT)).is_ok_and(|f| f == fingerprint(scene));
@@ -280,28 +272,19 @@ pub fn up_to_date(
     let Ok(plan) = read_file::<Plan>(&r.join(PLAN)) else {
         return false;
     };
-    // The plan's zones are those of grouting.csv within the horizon.
-    let last = horizon_days.map(|h| as_of + chrono::Duration::days(h as i64));
-    let want = schedules
-        .grouting
-        .iter()
-        .filter(|g| last.is_none_or(|l| g.planned <= l))
-        .count();
+    let want = options.zones(schedules).len();
     // Line numbers differ between the site's files and `inputs/`; what is
     // simulated and what the plan reads must not.
-    let meters = |s: &Schedules| -> Vec<(u32, u32, String, NaiveDate, u64)> {
+    let meters = |s: &Schedules| -> Vec<(ZoneId, ZonePoint, NaiveDate, u64)> {
         s.joint_meters
             .iter()
             .flatten()
-            .map(|m| {
-                let p = m.point.as_str().to_string();
-                (m.joint, m.zone, p, m.date, m.aperture_mm.to_bits())
-            })
+            .map(|m| (m.zone_id(), m.point, m.date, m.aperture_mm.to_bits()))
             .collect()
     };
     first_change(&old, schedules).is_none()
         && meters(&old) == meters(schedules)
-        && plan.as_of == as_of
+        && plan.as_of == options.as_of
         && plan.settings == scene.planner
         && plan.zones.len() == want
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::fem::quad4;
 use crate::joint::{ContactError, ContactState, LocalFrame};
 use crate::mesh::Mesh;
+use crate::vocab::JointState;
 
 /// Geometry of one contact point.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,14 +63,14 @@ impl JointPointState {
         }
     }
 
-    /// Label for tables: open, stick, slip, grouted or reopened.
-    pub fn label(&self) -> &'static str {
+    /// The state the tables report (a cracked grout layer is `Reopened`).
+    pub fn label(&self) -> JointState {
         match (&self.grout, self.state) {
-            (Some(g), _) if g.cracked_day.is_some() => "reopened",
-            (_, PointState::Grouted) => "grouted",
-            (_, PointState::Open) => "open",
-            (_, PointState::Stick) => "stick",
-            (_, PointState::Slip) => "slip",
+            (Some(g), _) if g.cracked_day.is_some() => JointState::Reopened,
+            (_, PointState::Grouted) => JointState::Grouted,
+            (_, PointState::Open) => JointState::Open,
+            (_, PointState::Stick) => JointState::Stick,
+            (_, PointState::Slip) => JointState::Slip,
         }
     }
 }

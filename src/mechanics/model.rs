@@ -9,8 +9,9 @@ use crate::fem::hex8::FACES;
 use crate::fem::{ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
-use crate::mesh::{Mesh, Part, SurfaceKind, ZonePoint};
+use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::scene::{Effect, Scene};
+use crate::vocab::JointState;
 use std::collections::HashMap;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
@@ -759,10 +760,10 @@ impl MechanicsModel {
     /// Aperture [m] and state label at a grouting-zone point (bilinear over
     /// the joint points of its face; a node shared with the rock is closed).
     /// None until both blocks exist there.
-    pub fn point_aperture(&self, mesh: &Mesh, zp: &ZonePoint) -> Option<(f64, &'static str)> {
+    pub fn point_aperture(&self, mesh: &Mesh, zp: &ZoneSite) -> Option<(f64, JointState)> {
         let pair = &mesh.face_pairs[zp.pair as usize];
         let n = crate::mesh::quad_shape(zp.s, zp.t);
-        let (mut value, mut label, mut best) = (0.0, "stick", -1.0);
+        let (mut value, mut label, mut best) = (0.0, JointState::Stick, -1.0);
         for k in 0..4 {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
@@ -784,7 +785,7 @@ impl MechanicsModel {
     /// Smallest aperture over the points of a zone: (aperture [m], state, node a).
     /// The smallest aperture over the zone inside its grout stops (the
     /// zone's joint points off the dam's faces), with its label and node.
-    pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<(f64, &'static str, u32)> {
+    pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<(f64, JointState, u32)> {
         self.zone_inner_points
             .get(&(joint, zone))?
             .iter()

@@ -9,10 +9,9 @@
 use std::collections::HashMap;
 use std::sync::OnceLock;
 
-use super::{
-    BlockInfo, FacePair, Mesh, MeshError, Part, PointKind, SurfaceFace, SurfaceKind, Zone,
-    ZonePoint,
-};
+use crate::vocab::ZonePoint;
+
+use super::{BlockInfo, FacePair, Mesh, MeshError, Part, SurfaceFace, SurfaceKind, Zone, ZoneSite};
 
 /// Largest node/element count a mesh may have (indices are `u32`).
 pub(crate) const MAX_ENTITIES: u64 = u32::MAX as u64 / 2;
@@ -314,10 +313,10 @@ pub(crate) fn build(g: Grid) -> Result<Mesh, MeshError> {
         } else {
             (g.j0 + n_across / 2 - 1, 1.0)
         };
-        for (kind, (j, s)) in [
-            (PointKind::Upstream, (g.j0, -1.0)),
-            (PointKind::Center, center),
-            (PointKind::Downstream, (g.j1 - 1, 1.0)),
+        for (point, (j, s)) in [
+            (ZonePoint::Upstream, (g.j0, -1.0)),
+            (ZonePoint::Center, center),
+            (ZonePoint::Downstream, (g.j1 - 1, 1.0)),
         ] {
             let pair = *pair_at.get(&(z.joint, layer as u32, j)).ok_or_else(|| {
                 bug(format!(
@@ -333,10 +332,10 @@ pub(crate) fn build(g: Grid) -> Result<Mesh, MeshError> {
                     xyz[c] += w[q] * nodes[node as usize][c];
                 }
             }
-            zone_points.push(ZonePoint {
+            zone_points.push(ZoneSite {
                 joint: z.joint,
                 zone: z.zone,
-                kind,
+                point,
                 pair,
                 s,
                 t,

@@ -73,6 +73,7 @@ pub use vtu::{write_pvd, write_vtu};
 /// Local faces of a hex8: the one table of `fem::hex8`.
 pub use crate::fem::hex8::FACES as HEX_FACES;
 use crate::fem::hex8::NODES as HEX_REF;
+use crate::vocab::{ZoneId, ZonePoint};
 
 /// Errors of the generators and of [`Mesh::validate`].
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -124,26 +125,6 @@ pub enum Part {
     Rock,
 }
 
-/// Where on a zone a reading is taken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PointKind {
-    Upstream,
-    Center,
-    Downstream,
-}
-
-impl PointKind {
-    /// `"upstream"`, `"center"`, `"downstream"` (as in the CSV outputs).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            PointKind::Upstream => "upstream",
-            PointKind::Center => "center",
-            PointKind::Downstream => "downstream",
-        }
-    }
-}
-
 /// One block (column of lifts).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BlockInfo {
@@ -174,12 +155,13 @@ pub struct FacePair {
     pub nodes_b: [u32; 4],
 }
 
-/// Where a zone's aperture/temperature is read.
+/// Where on the mesh a zone point (upstream, center or downstream; never
+/// `Min`) sits: the aperture and temperature of that point are read there.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ZonePoint {
+pub struct ZoneSite {
     pub joint: u32,
     pub zone: u32,
-    pub kind: PointKind,
+    pub point: ZonePoint,
     /// Index into [`Mesh::face_pairs`].
     pub pair: u32,
     /// Bilinear coordinates in [−1, 1]² on `nodes_a` of the pair ([`quad_shape`]).
@@ -197,6 +179,12 @@ pub struct Zone {
     pub z_top: f64,
     /// Indices into [`Mesh::face_pairs`] (by layer, then upstream → downstream).
     pub pairs: Vec<u32>,
+}
+
+impl Zone {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
+    }
 }
 
 /// Boundary condition family of an outer face.
@@ -245,7 +233,7 @@ pub struct Mesh {
     /// Sorted by (joint, zone).
     pub zones: Vec<Zone>,
     /// Sorted by (joint, zone, kind): three per zone.
-    pub zone_points: Vec<ZonePoint>,
+    pub zone_points: Vec<ZoneSite>,
     /// Faces on the outer boundary of the complete mesh.
     pub surfaces: Vec<SurfaceFace>,
     /// Elevation of the crest [m].
@@ -354,7 +342,7 @@ impl Mesh {
     }
 
     /// The three reading points (upstream, center, downstream) of a zone; empty if unknown.
-    pub fn zone_points_of(&self, joint: u32, zone: u32) -> &[ZonePoint] {
+    pub fn zone_points_of(&self, joint: u32, zone: u32) -> &[ZoneSite] {
         let lo = self
             .zone_points
             .partition_point(|p| (p.joint, p.zone) < (joint, zone));

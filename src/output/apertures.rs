@@ -12,16 +12,15 @@ use std::collections::BTreeSet;
 use std::io::{self, Write};
 use std::path::Path;
 
-use chrono::NaiveDate;
-
 use crate::sim::JointRecords;
+use crate::vocab::{Day, Epoch};
 
 /// Writes the file; returns the number of data rows.
 pub fn write(
     path: &Path,
-    epoch: NaiveDate,
+    epoch: Epoch,
     records: &JointRecords,
-    extra_days: &BTreeSet<i64>,
+    extra_days: &BTreeSet<Day>,
 ) -> io::Result<usize> {
     let mut w = io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(
@@ -29,15 +28,14 @@ pub fn write(
         "joint,zone,point,date,day,aperture_mm,state,temperature_c"
     )?;
     let last = records.rows.last().map(|r| r.0);
-    let keep = |day: f64| {
-        let d = day as i64;
-        d % 7 == 0 || extra_days.contains(&d) || Some(day) == last
-    };
+    let keep = |day: Day| day.0 % 7 == 0 || extra_days.contains(&day) || Some(day) == last;
     let mut rows = 0;
-    for (col, &(joint, zone, kind)) in records.columns.iter().enumerate() {
-        for (day, samples) in records.rows.iter().filter(|(d, _)| keep(*d)) {
-            let Some(s) = samples[col] else { continue };
-            let date = epoch + chrono::Duration::days(*day as i64);
+    for (i, col) in records.columns.iter().enumerate() {
+        let (joint, zone) = (col.zone.joint, col.zone.zone);
+        for &(day, ref samples) in records.rows.iter().filter(|(d, _)| keep(*d)) {
+            let Some(s) = samples[i] else { continue };
+            let date = epoch.date(day);
+            let day = day.0;
             let temp = if s.temperature.is_nan() {
                 String::new()
             } else {
@@ -46,7 +44,7 @@ pub fn write(
             writeln!(
                 w,
                 "{joint},{zone},{},{date},{day},{:.4},{},{temp}",
-                kind.as_str(),
+                col.point.as_str(),
                 1e3 * s.aperture,
                 s.state
             )?;

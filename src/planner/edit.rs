@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use chrono::NaiveDate;
 
 use crate::schedule::{CoolingStage, DamLayout, Schedules};
+use crate::vocab::ZoneId;
 
 /// Supercooling of one zone: colder water and a lower target for the cooling
 /// stage that brings its lifts (and the lifts `lifts_above` higher) to
@@ -13,8 +14,7 @@ use crate::schedule::{CoolingStage, DamLayout, Schedules};
 /// the zone's grouting date.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Supercool {
-    pub joint: u32,
-    pub zone: u32,
+    pub zone: ZoneId,
     pub delta_c: f64,
     pub planned: NaiveDate,
     pub from: NaiveDate,
@@ -22,7 +22,7 @@ pub struct Supercool {
 
 /// The lifts a zone's supercooling cools.
 fn cooled_lifts(layout: &DamLayout, z: &Supercool, lifts_above: u32) -> Vec<(u32, u32)> {
-    let Some(ext) = layout.zone(z.joint, z.zone) else {
+    let Some(ext) = layout.zone(z.zone) else {
         return Vec::new();
     };
     let mut out = Vec::new();
@@ -76,7 +76,7 @@ pub fn supercool(
     layout: &DamLayout,
     zones: &[Supercool],
     lifts_above: u32,
-) -> (Schedules, Vec<(u32, u32)>) {
+) -> (Schedules, Vec<ZoneId>) {
     // row → (ΔT, latest grouting date, from)
     let mut per_row: BTreeMap<usize, (f64, NaiveDate, NaiveDate)> = BTreeMap::new();
     let mut not_editable = Vec::new();
@@ -99,7 +99,7 @@ pub fn supercool(
             e.2 = e.2.min(z.from);
         }
         if !any {
-            not_editable.push((z.joint, z.zone));
+            not_editable.push(z.zone);
         }
     }
     let mut out = schedules.clone();
@@ -136,20 +136,20 @@ pub fn supercool(
 }
 
 /// Moves the grouting of zones to new dates.
-pub fn regrout(schedules: &Schedules, moves: &[(u32, u32, NaiveDate)]) -> Schedules {
+pub fn regrout(schedules: &Schedules, moves: &[(ZoneId, NaiveDate)]) -> Schedules {
     let mut out = schedules.clone();
     for g in &mut out.grouting {
-        if let Some(m) = moves.iter().find(|m| m.0 == g.joint && m.1 == g.zone) {
-            g.planned = m.2;
+        if let Some(m) = moves.iter().find(|m| m.0 == g.zone_id()) {
+            g.planned = m.1;
         }
     }
     out
 }
 
 /// Drops the grouting of zones (for the delay search).
-pub fn ungrout(schedules: &Schedules, zones: &[(u32, u32)]) -> Schedules {
+pub fn ungrout(schedules: &Schedules, zones: &[ZoneId]) -> Schedules {
     let mut out = schedules.clone();
-    out.grouting.retain(|g| !zones.contains(&(g.joint, g.zone)));
+    out.grouting.retain(|g| !zones.contains(&g.zone_id()));
     out
 }
 
@@ -179,8 +179,8 @@ pub fn first_change(a: &Schedules, b: &Schedules) -> Option<NaiveDate> {
     diff_maps(&grout(a), &grout(b), |x| *x, &mut at);
 
     // A stage is its block, lifts, kind and start; the rest may change.
-    type Key = (u32, u32, u32, u8, NaiveDate);
-    let stages = |s: &Schedules| -> BTreeMap<Key, (Option<NaiveDate>, u64, Option<u64>)> {
+    type ZoneId = (u32, u32, u32, u8, NaiveDate);
+    let stages = |s: &Schedules| -> BTreeMap<ZoneId, (Option<NaiveDate>, u64, Option<u64>)> {
         s.cooling
             .iter()
             .map(|c| {

@@ -27,11 +27,11 @@ pub mod edit;
 pub mod plan;
 pub mod readiness;
 pub mod rules;
+pub mod run;
 pub mod runner;
 pub mod search;
-pub mod settings;
 pub mod whatif;
 
 pub use plan::{plan, PlanOptions, PlanOutput, Progress};
 pub use readiness::*;
-pub use settings::{DecidingPoint, PlannerSettings};
+pub use run::PlannedRun;

@@ -9,20 +9,48 @@ use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Checkpoint, History, RunStats, SimError};
+use crate::vocab::{Day, Epoch, ZoneId};
 
 use super::readiness::{MeterComparison, Plan, PlanStats, ZoneHistory, ZoneReadiness};
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
 use super::search::{grout_days, search};
 
-/// What to plan.
-#[derive(Debug, Clone, Default)]
+/// What to plan: the as-of date that separates history from plan, and
+/// how far ahead.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlanOptions {
-    /// separates history from plan (default: the day after the last zone
-    /// marked done in grouting.csv, else today)
-    pub as_of: Option<NaiveDate>,
-    /// only zones due within this many days of the as-of date (default: all)
+    /// separates history from plan ([`default_as_of`] gives the usual one)
+    pub as_of: NaiveDate,
+    /// only zones due within this many days of the as-of date (None: all)
     pub horizon_days: Option<u32>,
+}
+
+impl PlanOptions {
+    /// The zones of `grouting.csv` this plan covers, by planned date: those
+    /// due within the horizon (every zone without one).
+    pub fn zones(&self, s: &Schedules) -> Vec<(NaiveDate, ZoneId)> {
+        let last = self
+            .horizon_days
+            .map(|h| self.as_of + chrono::Duration::days(h as i64));
+        let mut rows: Vec<(NaiveDate, ZoneId)> = s
+            .grouting
+            .iter()
+            .filter(|g| last.is_none_or(|l| g.planned <= l))
+            .map(|g| (g.planned, g.zone_id()))
+            .collect();
+        rows.sort();
+        rows
+    }
+
+    /// The day the plan's baseline ends: the last zone it covers is due,
+    /// or the as-of date if that is later.
+    pub fn end_day(&self, epoch: Epoch, s: &Schedules) -> Day {
+        self.zones(s)
+            .iter()
+            .map(|r| epoch.day(r.0))
+            .fold(epoch.day(self.as_of), Day::max)
+    }
 }
 
 /// Everything a plan produces besides the [`Plan`]: the baseline's
@@ -39,7 +67,7 @@ pub struct PlanOutput {
 }
 
 /// The as-of date the schedules imply: the day after the last zone marked
-/// done, else `today`.
+/// done, else `today` (the caller's clock: the library reads none).
 pub fn default_as_of(s: &Schedules, today: NaiveDate) -> NaiveDate {
     s.grouting
         .iter()
@@ -64,41 +92,25 @@ pub fn plan(
     let settings = &scene.planner;
     let layout = dam_layout(mesh);
     let rules = Rules::new(settings, &layout, mesh, scene.epoch, schedules);
-    let today = chrono::Local::now().date_naive();
-    let as_of = options
-        .as_of
-        .unwrap_or_else(|| default_as_of(schedules, today));
-    let as_of_day = rules.day(as_of);
-    let horizon = options.horizon_days.map(|d| as_of_day + d as f64);
-
-    let mut rows: Vec<(NaiveDate, u32, u32)> = schedules
-        .grouting
-        .iter()
-        .filter(|g| horizon.is_none_or(|h| rules.day(g.planned) <= h))
-        .map(|g| (g.planned, g.joint, g.zone))
-        .collect();
-    rows.sort();
-    let end_day = rows
-        .iter()
-        .map(|r| rules.day(r.0))
-        .fold(as_of_day, f64::max) as i64;
+    let as_of = options.as_of;
+    let rows = options.zones(schedules);
+    let end_day = options.end_day(scene.epoch, schedules);
     let span = Span {
         end_day,
         observe: vec![],
     };
-    let restarted_from = restart.as_ref().map(|r| rules.date(r.checkpoint.day));
+    let restarted_from = restart.as_ref().map(|r| scene.epoch.date(r.checkpoint.day));
     let (restart, older) = match restart {
         Some(r) => (Some((r.checkpoint, r.history)), r.older),
         None => (None, Vec::new()),
     };
-    let every = settings.checkpoint_days as f64;
     let (mut runner, baseline) = Runner::baseline(
         scene,
         mesh,
         schedules,
         &span,
         restart,
-        every,
+        settings.checkpoint_days as i64,
         &mut |d, e| progress(Progress::Baseline { day: d, end: e }),
     )?;
     runner.add_older(older);
@@ -108,8 +120,8 @@ pub fn plan(
     let idx = HistoryIndex::new(&runner.history);
     let mut zones: Vec<ZoneReadiness> = rows
         .iter()
-        .map(|&(date, joint, zone)| {
-            let mut r = rules.evaluate(&idx, joint, zone, rules.day(date), &grout);
+        .map(|&(date, zone)| {
+            let mut r = rules.evaluate(&idx, zone, scene.epoch.day(date), &grout);
             r.history = date < as_of;
             r
         })
@@ -119,10 +131,10 @@ pub fn plan(
         .filter(|z| !z.history && !z.verdict.groutable())
         .cloned()
         .collect();
-    let to_grout: Vec<(u32, u32)> = zones
+    let to_grout: Vec<ZoneId> = zones
         .iter()
         .filter(|z| !z.history)
-        .map(|z| (z.joint, z.zone))
+        .map(|z| z.zone_id())
         .collect();
     let outcome = search(
         &runner,
@@ -134,25 +146,24 @@ pub fn plan(
         &mut |what| progress(Progress::Resimulation(what.to_string())),
     )?;
     for z in zones.iter_mut() {
-        z.remedy = outcome.remedies.get(&(z.joint, z.zone)).cloned();
+        z.remedy = outcome.remedies.get(&z.zone_id()).cloned();
     }
 
     let idx = HistoryIndex::new(&runner.history);
-    let mut charted: Vec<(u32, u32, NaiveDate)> = flagged
-        .iter()
-        .map(|z| (z.joint, z.zone, z.planned))
-        .collect();
-    let meters = meter_comparisons(&rules, &idx, schedules, end_day as f64);
+    let mut charted: Vec<(ZoneId, NaiveDate)> =
+        flagged.iter().map(|z| (z.zone_id(), z.planned)).collect();
+    let meters = meter_comparisons(&rules, &idx, schedules, end_day);
     for m in &meters {
-        if !charted.iter().any(|c| c.0 == m.joint && c.1 == m.zone) {
-            if let Some(g) = schedules.grouting_of(m.joint, m.zone) {
-                charted.push((m.joint, m.zone, g.planned));
+        let id = ZoneId::new(m.joint, m.zone);
+        if !charted.iter().any(|c| c.0 == id) {
+            if let Some(g) = schedules.grouting_of(id) {
+                charted.push((id, g.planned));
             }
         }
     }
     let histories = charted
         .iter()
-        .map(|&(j, z, planned)| zone_history(&rules, &idx, j, z, planned))
+        .map(|&(id, planned)| zone_history(&rules, &idx, id, planned))
         .collect();
     let plan = Plan {
         scene: scene.name.clone(),
@@ -190,20 +201,24 @@ pub struct Restart {
 /// Progress of a plan, for a progress bar or a log.
 #[derive(Debug, Clone)]
 pub enum Progress {
-    Baseline { day: f64, end: f64 },
+    /// the baseline reached `day` of `end` [days since the epoch]
+    Baseline {
+        day: f64,
+        end: f64,
+    },
     Resimulation(String),
 }
 
+/// The daily history of one zone as the charts show it.
 pub fn zone_history(
     rules: &Rules,
     idx: &HistoryIndex,
-    joint: u32,
-    zone: u32,
+    id: ZoneId,
     planned: NaiveDate,
 ) -> ZoneHistory {
     let mut h = ZoneHistory {
-        joint,
-        zone,
+        joint: id.joint,
+        zone: id.zone,
         planned,
         dates: Vec::new(),
         upstream: Vec::new(),
@@ -214,12 +229,12 @@ pub fn zone_history(
     };
     for row in &idx.history.joint_records.rows {
         let day = row.0;
-        let a = idx.apertures(joint, zone, day);
+        let a = idx.apertures(id, day);
         if a.min.is_none() && h.dates.is_empty() {
             continue; // before the zone exists
         }
-        let [ta, tb] = idx.block_temps(joint, zone, day);
-        h.dates.push(rules.date(day));
+        let [ta, tb] = idx.block_temps(id, day);
+        h.dates.push(rules.epoch.date(day));
         h.upstream.push(a.upstream);
         h.center.push(a.center);
         h.downstream.push(a.downstream);
@@ -238,25 +253,19 @@ fn meter_comparisons(
     rules: &Rules,
     idx: &HistoryIndex,
     s: &Schedules,
-    end: f64,
+    end: Day,
 ) -> Vec<MeterComparison> {
     let Some(meters) = &s.joint_meters else {
         return Vec::new();
     };
-    let days: Vec<f64> = idx.history.joint_records.rows.iter().map(|r| r.0).collect();
-    let at = |m: &crate::schedule::JointMeter, day: f64| -> Option<f64> {
-        let a = idx.apertures(m.joint, m.zone, day);
-        match m.point {
-            crate::schedule::MeterPoint::Upstream => a.upstream,
-            crate::schedule::MeterPoint::Center => a.center,
-            crate::schedule::MeterPoint::Downstream => a.downstream,
-            crate::schedule::MeterPoint::Min => a.min,
-        }
+    let days: Vec<Day> = idx.history.joint_records.rows.iter().map(|r| r.0).collect();
+    let at = |m: &crate::schedule::JointMeter, day: Day| -> Option<f64> {
+        idx.apertures(m.zone_id(), day).at(m.point)
     };
     let mut out: Vec<MeterComparison> = meters
         .iter()
         .map(|m| {
-            let day = rules.day(m.date);
+            let day = rules.epoch.day(m.date);
             let predicted = if day > end {
                 None
             } else {
@@ -264,7 +273,10 @@ fn meter_comparisons(
                 match (days.get(i), i.checked_sub(1).and_then(|j| days.get(j))) {
                     (Some(&d1), _) if d1 == day => at(m, d1),
                     (Some(&d1), Some(&d0)) => match (at(m, d0), at(m, d1)) {
-                        (Some(a0), Some(a1)) => Some(a0 + (a1 - a0) * (day - d0) / (d1 - d0)),
+                        (Some(a0), Some(a1)) => {
+                            let w = day.since(d0) as f64 / d1.since(d0) as f64;
+                            Some(a0 + (a1 - a0) * w)
+                        }
                         _ => None,
                     },
                     _ => None,
@@ -273,7 +285,7 @@ fn meter_comparisons(
             MeterComparison {
                 joint: m.joint,
                 zone: m.zone,
-                point: m.point.as_str().to_string(),
+                point: m.point,
                 date: m.date,
                 measured_mm: m.aperture_mm,
                 predicted_mm: predicted,
@@ -281,7 +293,9 @@ fn meter_comparisons(
         })
         .collect();
     out.sort_by(|a, b| {
-        (a.joint, a.zone, &a.point, a.date).cmp(&(b.joint, b.zone, &b.point, b.date))
+        // by the point's spelling, as the reports have always listed them
+        let key = |m: &MeterComparison| (m.joint, m.zone, m.point.as_str(), m.date);
+        key(a).cmp(&key(b))
     });
     out
 }

@@ -5,7 +5,8 @@
 use chrono::NaiveDate;
 use serde::{Deserialize, Serialize};
 
-use super::settings::PlannerSettings;
+use crate::scene::PlannerSettings;
+use crate::vocab::{ZoneId, ZonePoint};
 
 /// A readiness rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -67,6 +68,18 @@ pub struct Apertures {
     pub min: Option<f64>,
 }
 
+impl Apertures {
+    /// The aperture at `point` [mm].
+    pub fn at(&self, point: ZonePoint) -> Option<f64> {
+        match point {
+            ZonePoint::Upstream => self.upstream,
+            ZonePoint::Center => self.center,
+            ZonePoint::Downstream => self.downstream,
+            ZonePoint::Min => self.min,
+        }
+    }
+}
+
 /// The planner's verdict on a zone.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -123,6 +136,10 @@ pub struct ZoneReadiness {
 }
 
 impl ZoneReadiness {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
+    }
+
     /// The failed rules' reasons, joined for one table cell.
     pub fn reasons(&self) -> String {
         self.checks
@@ -193,13 +210,24 @@ pub struct ZoneHistory {
     pub temperature: Vec<Option<f64>>,
 }
 
+impl ZoneHistory {
+    /// The aperture series of `point` [mm per date].
+    pub fn series(&self, point: ZonePoint) -> &[Option<f64>] {
+        match point {
+            ZonePoint::Upstream => &self.upstream,
+            ZonePoint::Center => &self.center,
+            ZonePoint::Downstream => &self.downstream,
+            ZonePoint::Min => &self.min,
+        }
+    }
+}
+
 /// One joint-meter reading against the prediction at its point and date.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MeterComparison {
     pub joint: u32,
     pub zone: u32,
-    /// upstream, center, downstream or min
-    pub point: String,
+    pub point: ZonePoint,
     pub date: NaiveDate,
     pub measured_mm: f64,
     /// None where the zone did not exist yet on that date in the simulation

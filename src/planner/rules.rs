@@ -10,28 +10,26 @@
 
 use std::collections::HashMap;
 
-use chrono::NaiveDate;
-
-use crate::mesh::PointKind;
+use crate::scene::PlannerSettings;
 use crate::schedule::{DamLayout, Schedules, ZoneExtent};
-use crate::sim::{History, JointColumnKind};
+use crate::sim::History;
+use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 
 use super::readiness::{Apertures, Rule, RuleCheck, Verdict, ZoneReadiness};
-use super::settings::{DecidingPoint, PlannerSettings};
 
 /// What the rules need besides a run's histories: the schedules as run, the
 /// dam's zones and the settings.
 pub struct Rules<'a> {
     pub settings: &'a PlannerSettings,
     pub layout: &'a DamLayout,
-    pub epoch: NaiveDate,
+    pub epoch: Epoch,
     pub lift_height: f64,
     /// (block) → (foundation elevation, number of lifts)
     pub blocks: HashMap<u32, (f64, u32)>,
-    /// (joint, zone) → (z_bottom, z_top)
-    pub zone_z: HashMap<(u32, u32), (f64, f64)>,
+    /// zone → (z_bottom, z_top)
+    pub zone_z: HashMap<ZoneId, (f64, f64)>,
     /// (block, lift) → pour day
-    pour_day: HashMap<(u32, u32), i64>,
+    pour_day: HashMap<(u32, u32), Day>,
 }
 
 /// Column indices of one zone in a [`History`].
@@ -47,37 +45,35 @@ struct ZoneColumns {
 /// Fast lookups into a [`History`].
 pub struct HistoryIndex<'h> {
     pub history: &'h History,
-    zones: HashMap<(u32, u32), ZoneColumns>,
+    zones: HashMap<ZoneId, ZoneColumns>,
 }
 
 impl<'h> HistoryIndex<'h> {
     pub fn new(history: &'h History) -> HistoryIndex<'h> {
-        let mut zones: HashMap<(u32, u32), ZoneColumns> = HashMap::new();
-        for (i, &(joint, zone, kind)) in history.joint_records.columns.iter().enumerate() {
-            let c = zones.entry((joint, zone)).or_default();
-            match kind {
-                JointColumnKind::Point { kind, .. } => match kind {
-                    PointKind::Upstream => c.upstream = Some(i),
-                    PointKind::Center => c.center = Some(i),
-                    PointKind::Downstream => c.downstream = Some(i),
-                },
-                JointColumnKind::Min => c.min = Some(i),
-            }
+        let mut zones: HashMap<ZoneId, ZoneColumns> = HashMap::new();
+        for (i, col) in history.joint_records.columns.iter().enumerate() {
+            let c = zones.entry(col.zone).or_default();
+            *match col.point {
+                ZonePoint::Upstream => &mut c.upstream,
+                ZonePoint::Center => &mut c.center,
+                ZonePoint::Downstream => &mut c.downstream,
+                ZonePoint::Min => &mut c.min,
+            } = Some(i);
         }
         for (i, z) in history.zone_temps.zones.iter().enumerate() {
-            zones.entry((z.joint, z.zone)).or_default().temps = Some(i);
+            zones.entry(z.zone_id()).or_default().temps = Some(i);
         }
         HistoryIndex { history, zones }
     }
 
-    fn joint_row(&self, day: f64) -> Option<usize> {
+    fn joint_row(&self, day: Day) -> Option<usize> {
         let rows = &self.history.joint_records.rows;
-        rows.binary_search_by(|r| r.0.total_cmp(&day)).ok()
+        rows.binary_search_by(|r| r.0.cmp(&day)).ok()
     }
 
     /// Apertures of a zone on a recorded day [mm].
-    pub fn apertures(&self, joint: u32, zone: u32, day: f64) -> Apertures {
-        let (Some(c), Some(r)) = (self.zones.get(&(joint, zone)), self.joint_row(day)) else {
+    pub fn apertures(&self, zone: ZoneId, day: Day) -> Apertures {
+        let (Some(c), Some(r)) = (self.zones.get(&zone), self.joint_row(day)) else {
             return Apertures::default();
         };
         let row = &self.history.joint_records.rows[r].1;
@@ -92,8 +88,8 @@ impl<'h> HistoryIndex<'h> {
 
     /// The first recorded day after `after` on which a point of the zone is
     /// labelled `reopened`.
-    pub fn reopened_after(&self, joint: u32, zone: u32, after: f64) -> Option<f64> {
-        let c = self.zones.get(&(joint, zone))?;
+    pub fn reopened_after(&self, zone: ZoneId, after: Day) -> Option<Day> {
+        let c = self.zones.get(&zone)?;
         let cols: Vec<usize> = [c.upstream, c.center, c.downstream, c.min]
             .into_iter()
             .flatten()
@@ -105,18 +101,18 @@ impl<'h> HistoryIndex<'h> {
             .filter(|r| r.0 > after)
             .find(|r| {
                 cols.iter()
-                    .any(|&i| r.1[i].is_some_and(|s| s.state == "reopened"))
+                    .any(|&i| r.1[i].is_some_and(|s| s.state == JointState::Reopened))
             })
             .map(|r| r.0)
     }
 
     /// Mean temperature of the zone's concrete in blocks A and B on a
     /// recorded day (None where not all its lifts are poured, or no thermal model).
-    pub fn block_temps(&self, joint: u32, zone: u32, day: f64) -> [Option<f64>; 2] {
+    pub fn block_temps(&self, zone: ZoneId, day: Day) -> [Option<f64>; 2] {
         let rows = &self.history.zone_temps.rows;
         let (Some(i), Ok(r)) = (
-            self.zones.get(&(joint, zone)).and_then(|c| c.temps),
-            rows.binary_search_by(|r| r.0.total_cmp(&day)),
+            self.zones.get(&zone).and_then(|c| c.temps),
+            rows.binary_search_by(|r| r.0.cmp(&day)),
         ) else {
             return [None, None];
         };
@@ -125,7 +121,7 @@ impl<'h> HistoryIndex<'h> {
     }
 
     /// Recorded days in `[from, to]`.
-    pub fn days_between(&self, from: f64, to: f64) -> impl Iterator<Item = f64> + '_ {
+    pub fn days_between(&self, from: Day, to: Day) -> impl Iterator<Item = Day> + '_ {
         self.history
             .joint_records
             .rows
@@ -140,7 +136,7 @@ impl<'a> Rules<'a> {
         settings: &'a PlannerSettings,
         layout: &'a DamLayout,
         mesh: &crate::mesh::Mesh,
-        epoch: NaiveDate,
+        epoch: Epoch,
         schedules: &Schedules,
     ) -> Rules<'a> {
         let mut rules = Rules {
@@ -156,7 +152,7 @@ impl<'a> Rules<'a> {
             zone_z: mesh
                 .zones
                 .iter()
-                .map(|z| ((z.joint, z.zone), (z.z_bottom, z.z_top)))
+                .map(|z| (z.zone_id(), (z.z_bottom, z.z_top)))
                 .collect(),
             pour_day: HashMap::new(),
         };
@@ -168,45 +164,22 @@ impl<'a> Rules<'a> {
         self.pour_day = schedules
             .pours
             .iter()
-            .map(|p| ((p.block, p.lift), (p.date - self.epoch).num_days()))
+            .map(|p| ((p.block, p.lift), self.epoch.day(p.date)))
             .collect();
     }
 
-    pub fn date(&self, day: f64) -> NaiveDate {
-        self.epoch + chrono::Duration::days(day.floor() as i64)
-    }
-
-    pub fn day(&self, date: NaiveDate) -> f64 {
-        (date - self.epoch).num_days() as f64
-    }
-
-    fn deciding(&self, a: &Apertures) -> Option<f64> {
-        match self.settings.aperture_point {
-            DecidingPoint::Min => a.min,
-            DecidingPoint::Upstream => a.upstream,
-            DecidingPoint::Center => a.center,
-            DecidingPoint::Downstream => a.downstream,
-        }
-    }
-
     /// The deciding aperture of a zone on a day [mm].
-    pub fn deciding_aperture(
-        &self,
-        h: &HistoryIndex,
-        joint: u32,
-        zone: u32,
-        day: f64,
-    ) -> Option<f64> {
-        self.deciding(&h.apertures(joint, zone, day))
+    pub fn deciding_aperture(&self, h: &HistoryIndex, zone: ZoneId, day: Day) -> Option<f64> {
+        h.apertures(zone, day).at(self.settings.aperture_point)
     }
 
-    /// The next lower zone of `joint` below `zone` that exists in the dam.
-    pub fn zone_below(&self, joint: u32, zone: u32) -> Option<u32> {
+    /// The next lower zone of the same joint that exists in the dam.
+    pub fn zone_below(&self, zone: ZoneId) -> Option<ZoneId> {
         self.layout
             .zones
             .iter()
-            .filter(|z| z.joint == joint && z.zone < zone)
-            .map(|z| z.zone)
+            .filter(|z| z.joint == zone.joint && z.zone < zone.zone)
+            .map(|z| z.zone_id())
             .max()
     }
 
@@ -215,24 +188,23 @@ impl<'a> Rules<'a> {
     pub fn evaluate(
         &self,
         h: &HistoryIndex,
-        joint: u32,
-        zone: u32,
-        day: f64,
-        grout_day: &HashMap<(u32, u32), f64>,
+        id: ZoneId,
+        day: Day,
+        grout_day: &HashMap<ZoneId, Day>,
     ) -> ZoneReadiness {
         let s = self.settings;
-        let ext = self.layout.zone(joint, zone).copied();
+        let ext = self.layout.zone(id).copied();
         let (z_bottom, z_top) = self
             .zone_z
-            .get(&(joint, zone))
+            .get(&id)
             .copied()
             .unwrap_or((f64::NAN, f64::NAN));
         let closure = s.closure_temp_at(0.5 * (z_bottom + z_top));
-        let apertures = h.apertures(joint, zone, day);
+        let apertures = h.apertures(id, day);
         let mut checks = Vec::with_capacity(5);
 
         // Aperture.
-        let a = self.deciding(&apertures);
+        let a = apertures.at(s.aperture_point);
         let point = s.aperture_point.as_str();
         checks.push(match a {
             Some(v) => RuleCheck {
@@ -257,7 +229,7 @@ impl<'a> Rules<'a> {
         });
 
         // Temperature.
-        let [ta, tb] = h.block_temps(joint, zone, day);
+        let [ta, tb] = h.block_temps(id, day);
         let limit = closure + s.closure_tolerance_c;
         let temp_check = match (ta, tb, ext) {
             (Some(ta), Some(tb), Some(e)) => {
@@ -304,10 +276,10 @@ impl<'a> Rules<'a> {
                 .iter()
                 .flat_map(|&(b, from, to)| (from..=to).map(move |l| (b, l)))
                 .map(|k| self.pour_day.get(&k).copied())
-                .collect::<Option<Vec<i64>>>()
+                .collect::<Option<Vec<Day>>>()
                 .and_then(|v| v.into_iter().max())
         });
-        let age = youngest.map(|p| day - p as f64).filter(|a| *a >= 0.0);
+        let age = youngest.map(|p| day.since(p) as f64).filter(|a| *a >= 0.0);
         checks.push(RuleCheck {
             rule: Rule::Age,
             value: age,
@@ -350,7 +322,7 @@ impl<'a> Rules<'a> {
         checks.push(cover_check);
 
         // Bottom-up order.
-        checks.push(match self.zone_below(joint, zone) {
+        checks.push(match self.zone_below(id) {
             None => RuleCheck {
                 rule: Rule::BottomUp,
                 value: None,
@@ -358,21 +330,26 @@ impl<'a> Rules<'a> {
                 passed: true,
                 reason: None,
             },
-            Some(below) => match grout_day.get(&(joint, below)) {
+            Some(below) => match grout_day.get(&below) {
                 Some(&d) => RuleCheck {
                     rule: Rule::BottomUp,
-                    value: Some(day - d),
+                    value: Some(day.since(d) as f64),
                     limit: 0.0,
                     passed: d <= day,
-                    reason: (d > day)
-                        .then(|| format!("zone {below} below is grouted later ({})", self.date(d))),
+                    reason: (d > day).then(|| {
+                        format!(
+                            "zone {} below is grouted later ({})",
+                            below.zone,
+                            self.epoch.date(d)
+                        )
+                    }),
                 },
                 None => RuleCheck {
                     rule: Rule::BottomUp,
                     value: None,
                     limit: 0.0,
                     passed: false,
-                    reason: Some(format!("zone {below} below has no grouting date")),
+                    reason: Some(format!("zone {} below has no grouting date", below.zone)),
                 },
             },
         });
@@ -384,9 +361,9 @@ impl<'a> Rules<'a> {
             _ => Verdict::Groutable,
         };
         ZoneReadiness {
-            joint,
-            zone,
-            planned: self.date(day),
+            joint: id.joint,
+            zone: id.zone,
+            planned: self.epoch.date(day),
             history: false,
             z_bottom_m: z_bottom,
             z_top_m: z_top,
@@ -398,25 +375,21 @@ impl<'a> Rules<'a> {
             cover_m,
             checks,
             verdict,
-            reopened: h.reopened_after(joint, zone, day).map(|d| self.date(d)),
+            reopened: h.reopened_after(id, day).map(|d| self.epoch.date(d)),
             remedy: None,
         }
     }
 
     /// The least cover over the blocks of the zone that are not complete on
     /// `day`, with that block; None when both are complete.
-    fn cover(&self, e: &ZoneExtent, z_top: f64, day: f64) -> Option<(f64, u32)> {
+    fn cover(&self, e: &ZoneExtent, z_top: f64, day: Day) -> Option<(f64, u32)> {
         let mut least: Option<(f64, u32)> = None;
         for (block, ..) in e.sides() {
             let Some(&(foundation, n_lifts)) = self.blocks.get(&block) else {
                 continue;
             };
             let poured = (1..=n_lifts)
-                .take_while(|&l| {
-                    self.pour_day
-                        .get(&(block, l))
-                        .is_some_and(|&d| d as f64 <= day)
-                })
+                .take_while(|&l| self.pour_day.get(&(block, l)).is_some_and(|&d| d <= day))
                 .count() as u32;
             if poured == n_lifts {
                 continue;

@@ -4,12 +4,11 @@
 
 use std::time::Instant;
 
-use chrono::NaiveDate;
-
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::Schedules;
 use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation};
+use crate::vocab::Day;
 
 use super::edit::first_change;
 
@@ -31,9 +30,9 @@ pub struct Runner<'a> {
 #[derive(Debug, Clone, Default)]
 pub struct Span {
     /// stop at the start of this day (its events applied and recorded)
-    pub end_day: i64,
+    pub end_day: Day,
     /// whole days that must be step ends (recorded rows)
-    pub observe: Vec<i64>,
+    pub observe: Vec<Day>,
 }
 
 impl<'a> Runner<'a> {
@@ -45,13 +44,13 @@ impl<'a> Runner<'a> {
         schedules: &Schedules,
         span: &Span,
         restart: Option<(Checkpoint, History)>,
-        every: f64,
+        every_days: i64,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<(Runner<'a>, RunStats), SimError> {
         let mut sim = Simulation::new(scene, mesh, schedules)?;
         sim.set_end_day(span.end_day);
         sim.observe_days(&span.observe);
-        sim.checkpoint_every = Some(every);
+        sim.checkpoint_every = Some(every_days);
         if let Some((ck, history)) = &restart {
             sim.restore(ck, history);
         }
@@ -75,7 +74,7 @@ impl<'a> Runner<'a> {
         mut checkpoints: Vec<Checkpoint>,
         history: History,
     ) -> Runner<'a> {
-        checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+        checkpoints.sort_by_key(|c| c.day);
         Runner {
             scene,
             mesh,
@@ -105,21 +104,20 @@ impl<'a> Runner<'a> {
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
         sim.cancel = cancel;
         sim.set_end_day(span.end_day);
-        let from = first_change(&self.base, schedules).map(|d| self.day_of(d));
-        // Observed days before the restart are recorded by the baseline already.
-        let start = from.map_or(f64::INFINITY, |f| f);
+        let from = first_change(&self.base, schedules).map(|d| self.scene.epoch.day(d));
         let restart = self
             .checkpoints
             .iter()
             .rev()
-            .find(|c| c.day <= start)
+            .find(|c| from.is_none_or(|f| c.day <= f))
             .cloned();
-        let restart_day = restart.as_ref().map_or(0.0, |c| c.day);
-        let observe: Vec<i64> = span
+        // Observed days before the restart are recorded by the baseline already.
+        let restart_day = restart.as_ref().map_or(Day(0), |c| c.day);
+        let observe: Vec<Day> = span
             .observe
             .iter()
             .copied()
-            .filter(|&d| d as f64 >= restart_day)
+            .filter(|&d| d >= restart_day)
             .collect();
         sim.observe_days(&observe);
         if let Some(ck) = &restart {
@@ -135,18 +133,17 @@ impl<'a> Runner<'a> {
     /// Adds checkpoints of an earlier run that agree with this baseline
     /// (taken before the day it restarted from).
     pub fn add_older(&mut self, older: Vec<Checkpoint>) {
-        let first = self.checkpoints.first().map_or(f64::INFINITY, |c| c.day);
-        self.checkpoints
-            .extend(older.into_iter().filter(|c| c.day < first));
-        self.checkpoints.sort_by(|a, b| a.day.total_cmp(&b.day));
+        let first = self.checkpoints.first().map(|c| c.day);
+        self.checkpoints.extend(
+            older
+                .into_iter()
+                .filter(|c| first.is_none_or(|f| c.day < f)),
+        );
+        self.checkpoints.sort_by_key(|c| c.day);
     }
 
     /// Re-simulations so far and their total seconds.
     pub fn resimulations(&self) -> (usize, f64) {
         *self.counters.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    pub fn day_of(&self, date: NaiveDate) -> f64 {
-        (date - self.scene.epoch).num_days() as f64
     }
 }

@@ -20,19 +20,19 @@ use std::collections::{BTreeMap, HashMap};
 
 use chrono::NaiveDate;
 
+use crate::scene::PlannerSettings;
 use crate::schedule::{DamLayout, Schedules};
 use crate::sim::{History, SimError};
+use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
 use super::readiness::{DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneReadiness};
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
 
-type Key = (u32, u32);
-
 /// What the search proposes, and the schedules with every proposal applied.
 pub struct Outcome {
-    pub remedies: HashMap<Key, Remedy>,
+    pub remedies: HashMap<ZoneId, Remedy>,
     /// the remedied schedules (None when nothing is proposed)
     pub schedules: Option<Schedules>,
     /// zones still to grout that were groutable but fail once the remedies
@@ -40,10 +40,11 @@ pub struct Outcome {
     pub newly_flagged: Vec<ZoneReadiness>,
 }
 
-pub fn grout_days(rules: &Rules, s: &Schedules) -> HashMap<Key, f64> {
+/// The grouting day of every zone in `s`.
+pub fn grout_days(rules: &Rules, s: &Schedules) -> HashMap<ZoneId, Day> {
     s.grouting
         .iter()
-        .map(|g| ((g.joint, g.zone), rules.day(g.planned)))
+        .map(|g| (g.zone_id(), rules.epoch.day(g.planned)))
         .collect()
 }
 
@@ -62,10 +63,9 @@ impl Ctx<'_, '_, '_> {
         self.runner.simulate(s, span)
     }
 
-    fn check(&self, h: &History, s: &Schedules, key: Key, day: f64) -> ZoneReadiness {
+    fn check(&self, h: &History, s: &Schedules, key: ZoneId, day: Day) -> ZoneReadiness {
         let grout = grout_days(self.rules, s);
-        self.rules
-            .evaluate(&HistoryIndex::new(h), key.0, key.1, day, &grout)
+        self.rules.evaluate(&HistoryIndex::new(h), key, day, &grout)
     }
 }
 
@@ -77,7 +77,7 @@ pub fn search(
     rules: &Rules<'_>,
     layout: &DamLayout,
     flagged: &[ZoneReadiness],
-    to_grout: &[Key],
+    to_grout: &[ZoneId],
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SimError> {
     let base = runner.base.clone();
@@ -109,104 +109,100 @@ pub fn search(
         )
     });
     let (supercool, delay) = (supercool?, delay?);
-    let s = rules.settings;
+    let mut remedies: HashMap<ZoneId, Remedy> = flagged
+        .iter()
+        .map(|z| {
+            (
+                z.zone_id(),
+                propose(z.zone_id(), &supercool, &delay, rules.settings),
+            )
+        })
+        .collect();
+    verify_together(&mut ctx, &base, flagged, to_grout, &mut remedies).map(
+        |(schedules, newly_flagged)| Outcome {
+            remedies,
+            schedules,
+            newly_flagged,
+        },
+    )
+}
 
-    let mut remedies: HashMap<Key, Remedy> = HashMap::new();
-    for z in flagged {
-        let key = (z.joint, z.zone);
-        let (sc, note_sc) = supercool
-            .get(&key)
-            .cloned()
-            .unwrap_or((None, String::new()));
-        let (dl, note_dl) = delay.get(&key).cloned().unwrap_or((None, String::new()));
-        let cost_sc = sc.as_ref().map(|o| o.delta_c * s.cost_per_degree_c);
-        let cost_dl = dl
-            .as_ref()
-            .map(|o| o.days as f64 * s.cost_per_day * (1 + o.also_delayed.len()) as f64);
-        let choice = match (cost_sc, cost_dl) {
-            (Some(a), Some(b)) if a <= b => RemedyChoice::Supercool,
-            (Some(_), Some(_)) => RemedyChoice::Delay,
-            (Some(_), None) => RemedyChoice::Supercool,
-            (None, Some(_)) => RemedyChoice::Delay,
-            (None, None) => RemedyChoice::None,
-        };
-        let note = match choice {
-            RemedyChoice::Supercool => match cost_dl {
-                Some(c) => format!(
-                    "supercooling costs {:.2} against {:.2} for the delay",
-                    cost_sc.unwrap_or(0.0),
-                    c
-                ),
-                None => format!("supercooling; {note_dl}"),
-            },
-            RemedyChoice::Delay => match cost_sc {
-                Some(c) => format!(
-                    "the delay costs {:.2} against {:.2} for supercooling",
-                    cost_dl.unwrap_or(0.0),
-                    c
-                ),
-                None => format!("delay; {note_sc}"),
-            },
-            RemedyChoice::None => {
-                format!("neither remedy works within the limits: {note_sc}; {note_dl}")
-            }
-        };
-        remedies.insert(
-            key,
-            Remedy {
-                supercool: sc,
-                delay: dl,
-                choice,
-                verified: None,
-                note,
-            },
-        );
+/// The cheaper of the two remedies found for a zone, by the scene's costs.
+fn propose(
+    key: ZoneId,
+    supercool: &Found<SupercoolOption>,
+    delay: &Found<DelayOption>,
+    s: &PlannerSettings,
+) -> Remedy {
+    let (sc, note_sc) = supercool
+        .get(&key)
+        .cloned()
+        .unwrap_or((None, String::new()));
+    let (dl, note_dl) = delay.get(&key).cloned().unwrap_or((None, String::new()));
+    let cost_sc = sc.as_ref().map(|o| o.delta_c * s.cost_per_degree_c);
+    let cost_dl = dl
+        .as_ref()
+        .map(|o| o.days as f64 * s.cost_per_day * (1 + o.also_delayed.len()) as f64);
+    let choice = match (cost_sc, cost_dl) {
+        (Some(a), Some(b)) if a <= b => RemedyChoice::Supercool,
+        (Some(_), Some(_)) => RemedyChoice::Delay,
+        (Some(_), None) => RemedyChoice::Supercool,
+        (None, Some(_)) => RemedyChoice::Delay,
+        (None, None) => RemedyChoice::None,
+    };
+    let note = match choice {
+        RemedyChoice::Supercool => match cost_dl {
+            Some(c) => format!(
+                "supercooling costs {:.2} against {:.2} for the delay",
+                cost_sc.unwrap_or(0.0),
+                c
+            ),
+            None => format!("supercooling; {note_dl}"),
+        },
+        RemedyChoice::Delay => match cost_sc {
+            Some(c) => format!(
+                "the delay costs {:.2} against {:.2} for supercooling",
+                cost_dl.unwrap_or(0.0),
+                c
+            ),
+            None => format!("delay; {note_sc}"),
+        },
+        RemedyChoice::None => {
+            format!("neither remedy works within the limits: {note_sc}; {note_dl}")
+        }
+    };
+    Remedy {
+        supercool: sc,
+        delay: dl,
+        choice,
+        verified: None,
+        note,
     }
+}
 
-    // All proposals together, re-simulated. A remedied zone that fails there
-    // (its neighbours' remedies differ from those of the search) gets one
-    // supercooling step or one week more, up to the limits, and the run is
-    // repeated (at most three rounds).
-    let lifts_above = lifts_above(rules);
+/// All proposals together, re-simulated. A remedied zone that fails there
+/// (its neighbours' remedies differ from those of the search) gets one
+/// supercooling step or one week more, up to the limits, and the run is
+/// repeated (at most three rounds). Returns the remedied schedules (None
+/// when nothing is proposed) and the zones the remedies newly flag.
+fn verify_together(
+    ctx: &mut Ctx,
+    base: &Schedules,
+    flagged: &[ZoneReadiness],
+    to_grout: &[ZoneId],
+    remedies: &mut HashMap<ZoneId, Remedy>,
+) -> Result<(Option<Schedules>, Vec<ZoneReadiness>), SimError> {
+    let rules = ctx.rules;
     let mut round = 0;
     loop {
-        let cooled: Vec<Supercool> = flagged
-            .iter()
-            .filter_map(|z| {
-                let r = &remedies[&(z.joint, z.zone)];
-                (r.choice == RemedyChoice::Supercool).then(|| Supercool {
-                    joint: z.joint,
-                    zone: z.zone,
-                    delta_c: r.supercool.as_ref().map_or(0.0, |o| o.delta_c),
-                    planned: z.planned,
-                    from: as_of,
-                })
-            })
-            .collect();
-        let mut moves: Vec<(u32, u32, NaiveDate)> = Vec::new();
-        for z in flagged {
-            let r = &remedies[&(z.joint, z.zone)];
-            if let (RemedyChoice::Delay, Some(d)) = (r.choice, &r.delay) {
-                moves.push((z.joint, z.zone, d.date));
-                for &above in &d.also_delayed {
-                    moves.push((z.joint, above, d.date));
-                }
-            }
-        }
-        if cooled.is_empty() && moves.is_empty() {
-            return Ok(Outcome {
-                remedies,
-                schedules: None,
-                newly_flagged: Vec::new(),
-            });
-        }
-        let (cooled_s, _) = edit::supercool(&base, layout, &cooled, lifts_above);
-        let remedied = edit::regrout(&cooled_s, &moves);
+        let Some(remedied) = remedied_schedules(ctx, base, flagged, remedies) else {
+            return Ok((None, Vec::new()));
+        };
         let new_days = grout_days(rules, &remedied);
         let end = to_grout
             .iter()
             .filter_map(|k| new_days.get(k))
-            .fold(0.0f64, |a, &b| a.max(b)) as i64;
+            .fold(Day(0), |a, &b| a.max(b));
         let h = ctx.run(
             "verifying all remedies together",
             &remedied,
@@ -222,10 +218,10 @@ pub fn search(
             let Some(&day) = new_days.get(&key) else {
                 continue;
             };
-            let r = rules.evaluate(&idx, key.0, key.1, day, &new_days);
+            let r = rules.evaluate(&idx, key, day, &new_days);
             match remedies.get_mut(&key) {
                 Some(rem) => {
-                    let a = rules.deciding_aperture(&idx, key.0, key.1, day);
+                    let a = rules.deciding_aperture(&idx, key, day);
                     rem.verified = Some((r.verdict, a));
                     if rem.choice == RemedyChoice::Supercool {
                         if let (Some(o), Some(a)) = (rem.supercool.as_mut(), a) {
@@ -241,36 +237,76 @@ pub fn search(
             }
         }
         if failing.is_empty() || round == 2 {
-            return Ok(Outcome {
-                remedies,
-                schedules: Some(remedied),
-                newly_flagged,
-            });
+            return Ok((Some(remedied), newly_flagged));
         }
         for key in failing {
-            let rem = remedies.get_mut(&key).expect("remedied");
-            match (rem.choice, rem.supercool.as_mut(), rem.delay.as_mut()) {
-                (RemedyChoice::Supercool, Some(o), _)
-                    if o.delta_c + s.supercooling_step_c <= s.max_supercooling_c + 1e-9 =>
-                {
-                    o.delta_c += s.supercooling_step_c;
-                    rem.note = format!(
-                        "{}; raised to {:.2} °C: the zones' remedies together needed more",
-                        rem.note, o.delta_c
-                    );
-                }
-                (RemedyChoice::Delay, _, Some(d)) if d.days + 7 <= s.max_delay_days => {
-                    d.days += 7;
-                    d.date += chrono::Duration::days(7);
-                    rem.note = format!(
-                        "{}; lengthened to {} days: the zones' remedies together needed more",
-                        rem.note, d.days
-                    );
-                }
-                _ => {}
+            if let Some(rem) = remedies.get_mut(&key) {
+                strengthen(rem, rules.settings);
             }
         }
         round += 1;
+    }
+}
+
+/// The base schedules with every proposed remedy applied; None when nothing
+/// is proposed.
+fn remedied_schedules(
+    ctx: &Ctx,
+    base: &Schedules,
+    flagged: &[ZoneReadiness],
+    remedies: &HashMap<ZoneId, Remedy>,
+) -> Option<Schedules> {
+    let cooled: Vec<Supercool> = flagged
+        .iter()
+        .filter_map(|z| {
+            let r = &remedies[&z.zone_id()];
+            (r.choice == RemedyChoice::Supercool).then(|| Supercool {
+                zone: z.zone_id(),
+                delta_c: r.supercool.as_ref().map_or(0.0, |o| o.delta_c),
+                planned: z.planned,
+                from: ctx.as_of,
+            })
+        })
+        .collect();
+    let mut moves: Vec<(ZoneId, NaiveDate)> = Vec::new();
+    for z in flagged {
+        let r = &remedies[&z.zone_id()];
+        if let (RemedyChoice::Delay, Some(d)) = (r.choice, &r.delay) {
+            moves.push((z.zone_id(), d.date));
+            for &above in &d.also_delayed {
+                moves.push((ZoneId::new(z.joint, above), d.date));
+            }
+        }
+    }
+    if cooled.is_empty() && moves.is_empty() {
+        return None;
+    }
+    let (cooled_s, _) = edit::supercool(base, ctx.layout, &cooled, lifts_above(ctx.rules));
+    Some(edit::regrout(&cooled_s, &moves))
+}
+
+/// One supercooling step or one week more for a remedy that failed among
+/// the others, within the limits.
+fn strengthen(rem: &mut Remedy, s: &PlannerSettings) {
+    match (rem.choice, rem.supercool.as_mut(), rem.delay.as_mut()) {
+        (RemedyChoice::Supercool, Some(o), _)
+            if o.delta_c + s.supercooling_step_c <= s.max_supercooling_c + 1e-9 =>
+        {
+            o.delta_c += s.supercooling_step_c;
+            rem.note = format!(
+                "{}; raised to {:.2} °C: the zones' remedies together needed more",
+                rem.note, o.delta_c
+            );
+        }
+        (RemedyChoice::Delay, _, Some(d)) if d.days + 7 <= s.max_delay_days => {
+            d.days += 7;
+            d.date += chrono::Duration::days(7);
+            rem.note = format!(
+                "{}; lengthened to {} days: the zones' remedies together needed more",
+                rem.note, d.days
+            );
+        }
+        _ => {}
     }
 }
 
@@ -278,7 +314,7 @@ pub(crate) fn lifts_above(rules: &Rules) -> u32 {
     (rules.settings.supercool_above_m / rules.lift_height).round() as u32
 }
 
-type Found<T> = HashMap<Key, (Option<T>, String)>;
+type Found<T> = HashMap<ZoneId, (Option<T>, String)>;
 
 /// How far a zone is from passing the rules cooling can fix, per rule
 /// (aperture in mm above the limit, temperature in °C below the limit);
@@ -371,7 +407,7 @@ fn supercool_search(
             .collect();
         if !blocking.is_empty() {
             out.insert(
-                (z.joint, z.zone),
+                z.zone_id(),
                 (
                     None,
                     format!("cooling cannot fix the {} rule", blocking.join(", ")),
@@ -379,7 +415,7 @@ fn supercool_search(
             );
         } else if k_max == 0 {
             out.insert(
-                (z.joint, z.zone),
+                z.zone_id(),
                 (None, "supercooling is not allowed (max 0 °C)".into()),
             );
         } else {
@@ -394,19 +430,18 @@ fn supercool_search(
     let from = ctx.as_of;
     let end = cands
         .iter()
-        .map(|z| ctx.rules.day(z.planned))
-        .fold(0.0f64, f64::max) as i64;
+        .map(|z| ctx.rules.epoch.day(z.planned))
+        .fold(Day(0), Day::max);
     let span = Span {
         end_day: end,
         observe: vec![],
     };
-    let edits = |ks: &BTreeMap<Key, u32>| -> Vec<Supercool> {
+    let edits = |ks: &BTreeMap<ZoneId, u32>| -> Vec<Supercool> {
         cands
             .iter()
             .filter_map(|z| {
-                ks.get(&(z.joint, z.zone)).map(|&k| Supercool {
-                    joint: z.joint,
-                    zone: z.zone,
+                ks.get(&z.zone_id()).map(|&k| Supercool {
+                    zone: z.zone_id(),
                     delta_c: k as f64 * step,
                     planned: z.planned,
                     from,
@@ -415,10 +450,10 @@ fn supercool_search(
             .collect()
     };
     let layout = ctx.layout;
-    let build = |ks: &BTreeMap<Key, u32>| edit::supercool(base, layout, &edits(ks), above);
+    let build = |ks: &BTreeMap<ZoneId, u32>| edit::supercool(base, layout, &edits(ks), above);
 
     // Can the largest supercooling fix each zone at all?
-    let all_max: BTreeMap<Key, u32> = cands.iter().map(|z| ((z.joint, z.zone), k_max)).collect();
+    let all_max: BTreeMap<ZoneId, u32> = cands.iter().map(|z| (z.zone_id(), k_max)).collect();
     let (s_max, not_editable) = build(&all_max);
     let h = ctx.run(
         &format!(
@@ -429,9 +464,9 @@ fn supercool_search(
         &s_max,
         &span,
     )?;
-    let mut brackets: BTreeMap<Key, Bracket> = BTreeMap::new();
+    let mut brackets: BTreeMap<ZoneId, Bracket> = BTreeMap::new();
     for z in &cands {
-        let key = (z.joint, z.zone);
+        let key = z.zone_id();
         if not_editable.contains(&key) {
             out.insert(
                 key,
@@ -442,7 +477,7 @@ fn supercool_search(
             );
             continue;
         }
-        let r = ctx.check(&h, &s_max, key, ctx.rules.day(z.planned));
+        let r = ctx.check(&h, &s_max, key, ctx.rules.epoch.day(z.planned));
         if r.verdict.groutable() {
             brackets.insert(
                 key,
@@ -469,7 +504,7 @@ fn supercool_search(
     }
     // Bracketed search on the grid, all zones in the same runs.
     while brackets.values().any(Bracket::open) {
-        let ks: BTreeMap<Key, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
+        let ks: BTreeMap<ZoneId, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
         let (sched, _) = build(&ks);
         let h = ctx.run(
             &format!("supercooling search, {} zones", brackets.len()),
@@ -482,9 +517,9 @@ fn supercool_search(
             }
             let z = cands
                 .iter()
-                .find(|z| (z.joint, z.zone) == *key)
+                .find(|z| z.zone_id() == *key)
                 .expect("candidate");
-            let r = ctx.check(&h, &sched, *key, ctx.rules.day(z.planned));
+            let r = ctx.check(&h, &sched, *key, ctx.rules.epoch.day(z.planned));
             b.update(ks[key], margins(&r), r.verdict.groutable());
         }
     }
@@ -514,25 +549,20 @@ fn delay_search(
     if flagged.is_empty() || s.max_delay_days == 0 {
         for z in flagged {
             out.insert(
-                (z.joint, z.zone),
+                z.zone_id(),
                 (None, "delays are not allowed (max 0 days)".into()),
             );
         }
         return Ok(out);
     }
-    let keys: Vec<Key> = flagged.iter().map(|z| (z.joint, z.zone)).collect();
-    let first = flagged
-        .iter()
-        .map(|z| ctx.rules.day(z.planned))
-        .fold(f64::INFINITY, f64::min) as i64;
-    let last = flagged
-        .iter()
-        .map(|z| ctx.rules.day(z.planned))
-        .fold(0.0f64, f64::max) as i64;
-    let end = last + s.max_delay_days as i64;
+    let keys: Vec<ZoneId> = flagged.iter().map(|z| z.zone_id()).collect();
+    let days = flagged.iter().map(|z| ctx.rules.epoch.day(z.planned));
+    let first = days.clone().min().unwrap_or_default();
+    let last = days.fold(Day(0), Day::max);
+    let end = last.plus(s.max_delay_days as i64);
     let span = Span {
         end_day: end,
-        observe: (first..=end).collect(),
+        observe: (first.0..=end.0).map(Day).collect(),
     };
     let sched = edit::ungrout(base, &keys);
     let h = ctx.run(
@@ -545,24 +575,23 @@ fn delay_search(
         &span,
     )?;
     let idx = HistoryIndex::new(&h);
-    let sim_end = h.joint_records.rows.last().map_or(0.0, |r| r.0);
+    let sim_end = h.joint_records.rows.last().map_or(Day(0), |r| r.0);
     let mut grout = grout_days(ctx.rules, base);
     // Bottom-up per joint, so a lower zone's new date is known above it.
     let mut order: Vec<&ZoneReadiness> = flagged.iter().collect();
     order.sort_by_key(|z| (z.joint, z.zone));
     for z in order {
-        let key = (z.joint, z.zone);
-        let planned = ctx.rules.day(z.planned);
+        let (key, planned) = (z.zone_id(), ctx.rules.epoch.day(z.planned));
         let mut found = None;
         for d in 1..=s.max_delay_days {
-            let day = planned + d as f64;
+            let day = planned.plus(d as i64);
             if day > sim_end {
                 break;
             }
             grout.insert(key, day);
             if ctx
                 .rules
-                .evaluate(&idx, key.0, key.1, day, &grout)
+                .evaluate(&idx, key, day, &grout)
                 .checks
                 .iter()
                 .all(|c| c.passed)
@@ -577,22 +606,22 @@ fn delay_search(
                     .grouting
                     .iter()
                     .filter(|g| g.joint == z.joint && g.zone > z.zone)
-                    .filter(|g| ctx.rules.day(g.planned) < day)
+                    .filter(|g| ctx.rules.epoch.day(g.planned) < day)
                     .map(|g| g.zone)
                     .collect();
                 for &above in &also {
-                    grout.insert((z.joint, above), day);
+                    grout.insert(ZoneId::new(z.joint, above), day);
                 }
                 let a = ctx
                     .rules
-                    .deciding_aperture(&idx, key.0, key.1, day)
+                    .deciding_aperture(&idx, key, day)
                     .unwrap_or(f64::NAN);
                 out.insert(
                     key,
                     (
                         Some(DelayOption {
                             days,
-                            date: ctx.rules.date(day),
+                            date: ctx.rules.epoch.date(day),
                             aperture_mm: a,
                             also_delayed: also,
                         }),
@@ -602,13 +631,8 @@ fn delay_search(
             }
             None => {
                 grout.insert(key, planned);
-                let at_end = ctx.rules.evaluate(
-                    &idx,
-                    key.0,
-                    key.1,
-                    (planned + s.max_delay_days as f64).min(sim_end),
-                    &grout,
-                );
+                let last = planned.plus(s.max_delay_days as i64).min(sim_end);
+                let at_end = ctx.rules.evaluate(&idx, key, last, &grout);
                 out.insert(
                     key,
                     (

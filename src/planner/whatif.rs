@@ -15,6 +15,7 @@ use chrono::NaiveDate;
 
 use crate::schedule::{DamLayout, Schedules};
 use crate::sim::SimError;
+use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
 use super::plan::zone_history;
@@ -32,6 +33,12 @@ pub struct WhatIf {
     pub supercool_c: f64,
     /// the grouting date to check (the planned date: no delay)
     pub date: NaiveDate,
+}
+
+impl WhatIf {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
+    }
 }
 
 /// The what-if's answer.
@@ -62,7 +69,7 @@ pub fn edit_schedules(
 ) -> (Schedules, Vec<u32>, Applied) {
     let mut s = base.clone();
     let mut also = Vec::new();
-    let planned = base.grouting_of(w.joint, w.zone).map(|g| g.planned);
+    let planned = base.grouting_of(w.zone_id()).map(|g| g.planned);
     if planned.is_some_and(|p| p != w.date) {
         also = base
             .grouting
@@ -70,17 +77,16 @@ pub fn edit_schedules(
             .filter(|g| g.joint == w.joint && g.zone > w.zone && g.planned < w.date)
             .map(|g| g.zone)
             .collect();
-        let moves: Vec<(u32, u32, NaiveDate)> = std::iter::once(w.zone)
+        let moves: Vec<(ZoneId, NaiveDate)> = std::iter::once(w.zone)
             .chain(also.iter().copied())
-            .map(|z| (w.joint, z, w.date))
+            .map(|z| (ZoneId::new(w.joint, z), w.date))
             .collect();
         s = edit::regrout(&s, &moves);
     }
     let mut applied = Applied::Yes;
     if w.supercool_c > 0.0 {
         let sc = [Supercool {
-            joint: w.joint,
-            zone: w.zone,
+            zone: w.zone_id(),
             delta_c: w.supercool_c,
             planned: w.date,
             from: as_of,
@@ -133,18 +139,18 @@ pub fn run(
         .joint_records
         .rows
         .last()
-        .map_or(0.0, |r| r.0);
+        .map_or(Day(0), |r| r.0);
     let span = Span {
-        end_day: rules.day(w.date).max(base_end) as i64,
+        end_day: rules.epoch.day(w.date).max(base_end),
         observe: vec![],
     };
     let history = runner.simulate_with(&schedules, &span, cancel, progress)?;
     let rules = Rules::new(settings, layout, runner.mesh, epoch, &schedules);
     let idx = HistoryIndex::new(&history);
     let grout = grout_days(&rules, &schedules);
-    let mut readiness = rules.evaluate(&idx, w.joint, w.zone, rules.day(w.date), &grout);
+    let mut readiness = rules.evaluate(&idx, w.zone_id(), rules.epoch.day(w.date), &grout);
     readiness.history = false;
-    let zone_h = zone_history(&rules, &idx, w.joint, w.zone, w.date);
+    let zone_h = zone_history(&rules, &idx, w.zone_id(), w.date);
     Ok(WhatIfOutcome {
         what_if: *w,
         schedules,

@@ -6,7 +6,8 @@ use chrono::NaiveDate;
 
 use super::meters::MeterSeries;
 use super::svg::{self, num, DateMmAxes, Svg, FRAME};
-use crate::planner::{PlannerSettings, ZoneHistory};
+use crate::planner::ZoneHistory;
+use crate::scene::PlannerSettings;
 
 /// File name of a zone's aperture chart, inside `charts/`.
 pub fn zone_chart_file(joint: u32, zone: u32) -> String {

@@ -93,7 +93,7 @@ mod tests {
         MeterComparison {
             joint,
             zone: 1,
-            point: point.into(),
+            point: crate::vocab::ZonePoint::parse(point).expect("a point"),
             date: chrono::NaiveDate::from_ymd_opt(2024, 5, day).unwrap(),
             measured_mm: measured,
             predicted_mm: predicted,

@@ -6,7 +6,8 @@ use std::fmt::Write;
 
 use super::summary::Summary;
 use super::words::{self, opt};
-use crate::planner::{Plan, PlannerSettings, Verdict, ZoneReadiness};
+use crate::planner::{Plan, Verdict, ZoneReadiness};
+use crate::scene::PlannerSettings;
 
 /// Widest line of the table, in characters.
 pub const LINE_WIDTH: usize = 120;

@@ -2,9 +2,9 @@
 //! a zone, shared by the terminal table, the Markdown report and the CSV,
 //! so every output says the same thing the same way.
 
-use crate::planner::{
-    DecidingPoint, PlannerSettings, Remedy, RemedyChoice, Verdict, ZoneReadiness,
-};
+use crate::planner::{Remedy, RemedyChoice, Verdict, ZoneReadiness};
+use crate::scene::PlannerSettings;
+use crate::vocab::ZonePoint;
 
 /// A symbol that reads without colour.
 pub fn verdict_symbol(v: Verdict) -> &'static str {
@@ -36,13 +36,13 @@ pub fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
 }
 
 /// The aperture the rule is decided on.
-pub fn deciding_aperture(z: &ZoneReadiness, point: DecidingPoint) -> Option<f64> {
+pub fn deciding_aperture(z: &ZoneReadiness, point: ZonePoint) -> Option<f64> {
     let a = &z.apertures_mm;
     match point {
-        DecidingPoint::Min => a.min,
-        DecidingPoint::Upstream => a.upstream,
-        DecidingPoint::Center => a.center,
-        DecidingPoint::Downstream => a.downstream,
+        ZonePoint::Min => a.min,
+        ZonePoint::Upstream => a.upstream,
+        ZonePoint::Center => a.center,
+        ZonePoint::Downstream => a.downstream,
     }
 }
 

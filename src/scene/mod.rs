@@ -34,6 +34,7 @@
 //! ```
 
 mod error;
+mod planner;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -43,8 +44,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::material::{AdiabaticRise, AutogenousLaw, CreepLaw, ModulusLaw, PipeLayout};
 use crate::mesh::geometry::Geometry;
+use crate::vocab::Epoch;
 
 pub use error::SceneError;
+pub use planner::PlannerSettings;
 
 /// Seconds per day: heat flows in W are turned into J/day with this factor.
 pub const SECONDS_PER_DAY: f64 = 86_400.0;
@@ -82,8 +85,8 @@ pub struct Scene {
     /// Human name shown in reports.
     pub name: String,
     /// Day 0 of the simulation (`YYYY-MM-DD`, quoted or a bare TOML date).
-    #[serde(deserialize_with = "dates::date")]
-    pub epoch: NaiveDate,
+    #[serde(deserialize_with = "dates::epoch")]
+    pub epoch: Epoch,
     /// Default schedules folder, relative to the scene file's folder.
     #[serde(default)]
     pub schedules: Option<PathBuf>,
@@ -120,7 +123,7 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// Readiness rules and remedy search (all keys optional).
     #[serde(default)]
-    pub planner: crate::planner::PlannerSettings,
+    pub planner: crate::scene::PlannerSettings,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -544,11 +547,6 @@ impl Scene {
     pub fn rock_diffusivity_m2_per_day(&self) -> Option<f64> {
         self.rock.as_ref().map(Rock::diffusivity_m2_per_day)
     }
-
-    /// Simulation day (days since the epoch) of `date`; negative before the epoch.
-    pub fn day_of(&self, date: NaiveDate) -> f64 {
-        (date - self.epoch).num_days() as f64
-    }
 }
 
 impl Concrete {
@@ -685,6 +683,10 @@ mod dates {
 
     pub(super) fn date<'de, D: Deserializer<'de>>(d: D) -> Result<NaiveDate, D::Error> {
         d.deserialize_any(DateVisitor)
+    }
+
+    pub(super) fn epoch<'de, D: Deserializer<'de>>(d: D) -> Result<crate::vocab::Epoch, D::Error> {
+        date(d).map(crate::vocab::Epoch)
     }
 
     struct Wrapped(NaiveDate);

@@ -157,7 +157,7 @@ pub(super) fn validate(s: &Scene) -> Check {
         ));
     }
     if let Some(end) = t.end_date {
-        if end <= s.epoch {
+        if end <= s.epoch.0 {
             return Err(SceneError::invalid(
                 "time.end_date",
                 format!("time.end_date = {end} must be after epoch {}", s.epoch),
@@ -174,7 +174,7 @@ pub(super) fn validate(s: &Scene) -> Check {
 
     // Output.
     for d in &s.output.snapshots {
-        if *d < s.epoch {
+        if *d < s.epoch.0 {
             return Err(SceneError::invalid(
                 "output.snapshots",
                 format!("output.snapshots: {d} is before epoch {}", s.epoch),

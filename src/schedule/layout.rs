@@ -2,6 +2,8 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
+use crate::vocab::ZoneId;
+
 use super::check::lifts_label;
 use super::error::ScheduleError;
 use super::{Pour, Schedules, COOLING_CSV, GROUTING_CSV, JOINT_METERS_CSV, POURS_CSV};
@@ -28,6 +30,10 @@ pub struct ZoneExtent {
 }
 
 impl ZoneExtent {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
+    }
+
     /// Both sides: `[(block, first lift, last lift); 2]`.
     pub fn sides(&self) -> [(u32, u32, u32); 2] {
         [self.lifts_a, self.lifts_b]
@@ -41,10 +47,8 @@ impl DamLayout {
     }
 
     /// The extent of `zone` of `joint`.
-    pub fn zone(&self, joint: u32, zone: u32) -> Option<&ZoneExtent> {
-        self.zones
-            .iter()
-            .find(|z| z.joint == joint && z.zone == zone)
+    pub fn zone(&self, id: ZoneId) -> Option<&ZoneExtent> {
+        self.zones.iter().find(|z| z.zone_id() == id)
     }
 
     /// Joints that have at least one zone, ascending.
@@ -241,7 +245,7 @@ pub fn check_against(s: &Schedules, layout: &DamLayout) -> Result<(), ScheduleEr
         s.pours.iter().map(|p| ((p.block, p.lift), p)).collect();
     for g in &s.grouting {
         check_joint_zone(GROUTING_CSV, g.line, layout, &joints, g.joint, g.zone)?;
-        let Some(z) = layout.zone(g.joint, g.zone) else {
+        let Some(z) = layout.zone(g.zone_id()) else {
             continue; // unreachable after check_joint_zone
         };
         let what = format!(

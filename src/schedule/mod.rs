@@ -79,6 +79,8 @@ use std::path::{Path, PathBuf};
 
 use chrono::NaiveDate;
 
+use crate::vocab::{ZoneId, ZonePoint};
+
 pub use check::validate;
 pub use error::ScheduleError;
 pub use layout::{check_against, DamLayout, ZoneExtent};
@@ -204,46 +206,9 @@ pub struct GroutingPlan {
     pub line: usize,
 }
 
-/// Where a joint meter reading applies (the `point` column).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum MeterPoint {
-    Upstream,
-    Center,
-    Downstream,
-    /// The zone's minimum aperture.
-    Min,
-}
-
-impl MeterPoint {
-    pub const ALL: [MeterPoint; 4] = [
-        MeterPoint::Upstream,
-        MeterPoint::Center,
-        MeterPoint::Downstream,
-        MeterPoint::Min,
-    ];
-
-    /// The CSV spelling: `upstream`, `center`, `downstream`, `min`.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            MeterPoint::Upstream => "upstream",
-            MeterPoint::Center => "center",
-            MeterPoint::Downstream => "downstream",
-            MeterPoint::Min => "min",
-        }
-    }
-
-    /// Parses the CSV spelling (case-insensitive, surrounding blanks ignored).
-    pub fn parse(text: &str) -> Option<MeterPoint> {
-        let t = text.trim();
-        MeterPoint::ALL
-            .into_iter()
-            .find(|p| p.as_str().eq_ignore_ascii_case(t))
-    }
-}
-
-impl fmt::Display for MeterPoint {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
+impl GroutingPlan {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
     }
 }
 
@@ -252,11 +217,18 @@ impl fmt::Display for MeterPoint {
 pub struct JointMeter {
     pub joint: u32,
     pub zone: u32,
-    pub point: MeterPoint,
+    /// where the meter reads (the `point` column; `min` is the zone's minimum)
+    pub point: ZonePoint,
     pub date: NaiveDate,
     pub aperture_mm: f64,
     /// 1-based line in `joint_meters.csv`.
     pub line: usize,
+}
+
+impl JointMeter {
+    pub fn zone_id(&self) -> ZoneId {
+        ZoneId::new(self.joint, self.zone)
+    }
 }
 
 /// Everything read from one schedule folder. Rows keep the file order.
@@ -285,10 +257,8 @@ impl Schedules {
     }
 
     /// The grouting plan of `zone` of `joint`, if any (linear search).
-    pub fn grouting_of(&self, joint: u32, zone: u32) -> Option<&GroutingPlan> {
-        self.grouting
-            .iter()
-            .find(|g| g.joint == joint && g.zone == zone)
+    pub fn grouting_of(&self, zone: ZoneId) -> Option<&GroutingPlan> {
+        self.grouting.iter().find(|g| g.zone_id() == zone)
     }
 
     /// The first and last dates of pours, cooling starts/ends and grouting

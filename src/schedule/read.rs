@@ -5,13 +5,14 @@ use std::path::Path;
 
 use chrono::NaiveDate;
 
+use crate::vocab::ZonePoint;
+
 use super::check;
 use super::error::ScheduleError;
 use super::{
-    CoolingStage, GroutingPlan, JointMeter, MeterPoint, Pour, Schedules, Stage, COOLING_CSV,
-    COOLING_HEADER, GROUTING_CSV, GROUTING_HEADER, GROUTING_HEADER_STATUS, JOINT_METERS_CSV,
-    JOINT_METERS_HEADER, POURS_CSV, POURS_HEADER, RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV,
-    WEATHER_HEADER,
+    CoolingStage, GroutingPlan, JointMeter, Pour, Schedules, Stage, COOLING_CSV, COOLING_HEADER,
+    GROUTING_CSV, GROUTING_HEADER, GROUTING_HEADER_STATUS, JOINT_METERS_CSV, JOINT_METERS_HEADER,
+    POURS_CSV, POURS_HEADER, RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV, WEATHER_HEADER,
 };
 
 /// The data rows of one file, fields trimmed, blank lines dropped.
@@ -430,7 +431,7 @@ fn meters(t: &Table) -> Result<Vec<JointMeter>, ScheduleError> {
         let c = Cells::new(t, r);
         let joint = c.id(0)?;
         let zone = c.id(1)?;
-        let point = MeterPoint::parse(c.text(2))
+        let point = ZonePoint::parse(c.text(2))
             .ok_or_else(|| c.err(2, "expected one of upstream, center, downstream, min"))?;
         out.push(JointMeter {
             joint,

@@ -469,8 +469,10 @@ mod tests {
         // Grouting: bottom-up, old enough, covered, every zone's lifts in
         // second-stage cooling right before the grouting date.
         for z in &l.zones {
-            let g = s.grouting_of(z.joint, z.zone).unwrap().planned;
-            if let Some(below) = s.grouting_of(z.joint, z.zone.saturating_sub(1)) {
+            let g = s.grouting_of(z.zone_id()).unwrap().planned;
+            if let Some(below) =
+                s.grouting_of(crate::vocab::ZoneId::new(z.joint, z.zone.saturating_sub(1)))
+            {
                 assert!(below.planned + Days::new(7) <= g);
             }
             for (b, first, last) in z.sides() {

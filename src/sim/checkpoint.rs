@@ -19,13 +19,14 @@ use serde::{Deserialize, Serialize};
 use super::{JointRecords, Simulation, ZoneRecords, ZoneTemps};
 use crate::mechanics::MechState;
 use crate::thermal::ThermalCheckpoint;
+use crate::vocab::Day;
 
 use super::timeline::Ladder;
 
 /// The state of a run at the start of `day`, before its events.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Checkpoint {
-    pub day: f64,
+    pub day: Day,
     ladder: Ladder,
     pours_done: usize,
     steps: usize,
@@ -44,7 +45,7 @@ pub struct History {
 
 impl History {
     /// The rows recorded before `day`.
-    pub fn before(&self, day: f64) -> History {
+    pub fn before(&self, day: Day) -> History {
         let mut h = self.clone();
         h.records.rows.retain(|r| r.0 < day);
         h.joint_records.rows.retain(|r| r.0 < day);
@@ -118,7 +119,7 @@ impl Simulation<'_> {
     /// (where [`Simulation::run`] takes its checkpoints).
     pub fn checkpoint(&self) -> Checkpoint {
         Checkpoint {
-            day: self.day,
+            day: Day::containing(self.day),
             ladder: self.ladder,
             pours_done: self.pours_done,
             steps: self.steps,
@@ -140,7 +141,7 @@ impl Simulation<'_> {
     /// simulation's schedules; `history` supplies the rows before its day.
     /// Both the checkpoint and this simulation must have the same effects.
     pub fn restore(&mut self, ck: &Checkpoint, history: &History) {
-        self.day = ck.day;
+        self.day = ck.day.t();
         self.ladder = ck.ladder;
         self.pours_done = ck.pours_done;
         self.steps = ck.steps;
@@ -164,54 +165,12 @@ impl Simulation<'_> {
         let Some(every) = self.checkpoint_every else {
             return;
         };
-        let due = self.checkpoints.last().map_or(every, |c| c.day + every);
-        if self.day >= due {
+        let due = self
+            .checkpoints
+            .last()
+            .map_or(Day(every), |c| c.day.plus(every));
+        if self.day >= due.t() {
             self.checkpoints.push(self.checkpoint());
         }
-    }
-}
-
-/// A [`super::JointSample`] on disk: its state label as text.
-#[derive(Serialize, Deserialize)]
-pub struct SampleRecord {
-    aperture: f64,
-    state: String,
-    temperature: f64,
-}
-
-const LABELS: [&str; 5] = ["open", "stick", "slip", "grouted", "reopened"];
-
-impl From<super::JointSample> for SampleRecord {
-    fn from(s: super::JointSample) -> Self {
-        SampleRecord {
-            aperture: s.aperture,
-            state: s.state.to_string(),
-            temperature: s.temperature,
-        }
-    }
-}
-
-// Written by hand: a derived impl would demand 'de: 'static for the label.
-impl<'de> Deserialize<'de> for super::JointSample {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let r = SampleRecord::deserialize(d)?;
-        super::JointSample::try_from(r).map_err(serde::de::Error::custom)
-    }
-}
-
-impl TryFrom<SampleRecord> for super::JointSample {
-    type Error = String;
-
-    fn try_from(r: SampleRecord) -> Result<Self, String> {
-        let state = LABELS
-            .iter()
-            .find(|l| **l == r.state)
-            .copied()
-            .ok_or_else(|| format!("unknown joint state {:?}", r.state))?;
-        Ok(super::JointSample {
-            aperture: r.aperture,
-            state,
-            temperature: r.temperature,
-        })
     }
 }

@@ -3,23 +3,27 @@
 //! events ([`timeline`]). Results are recorded at whole-day step ends.
 
 pub mod checkpoint;
+pub mod snapshot;
 pub mod timeline;
-
-use std::path::Path;
 
 use chrono::NaiveDate;
 
 use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
-use crate::mesh::{Mesh, PointKind};
+use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene};
 use crate::schedule::{DamLayout, Schedules, ZoneExtent};
-use crate::thermal::boundary::{day_of, AirTemperature, Series, Water};
+use crate::thermal::boundary::{AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
+use crate::vocab::{Day, JointState, ZoneId, ZonePoint};
 
 pub use checkpoint::{Checkpoint, History};
 
+pub use snapshot::Snapshot;
 use timeline::{snap, DayEvents, Ladder, Timeline};
+
+/// Receives the snapshots of a run, on the scene's snapshot dates.
+pub type SnapshotSink<'s> = dyn FnMut(&Snapshot) -> std::io::Result<()> + 's;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -37,9 +41,9 @@ pub enum SimError {
     NoReservoir(String),
     #[error("cancelled on {0}")]
     Cancelled(NaiveDate),
-    #[error("writing snapshot {path}: {source}")]
+    #[error("writing the snapshot of {date}: {source}")]
     Snapshot {
-        path: String,
+        date: NaiveDate,
         source: std::io::Error,
     },
 }
@@ -47,36 +51,27 @@ pub enum SimError {
 /// Temperature history at the grouting-zone points, one row per whole day.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ZoneRecords {
-    /// (joint, zone, point) per column
-    pub points: Vec<(u32, u32, PointKind)>,
+    /// the zone and point of each column
+    pub points: Vec<(ZoneId, ZonePoint)>,
     /// (day, value per point; NaN where the point's concrete is not yet poured)
-    pub rows: Vec<(f64, Vec<f64>)>,
+    pub rows: Vec<(Day, Vec<f64>)>,
 }
 
-/// Where a joint column samples its zone.
+/// One column of the joint history: a zone point read at its mesh site, or
+/// the zone's smallest aperture (`ZonePoint::Min`, no site).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum JointColumnKind {
-    /// a zone point (index into `Mesh::zone_points`)
-    Point { kind: PointKind, index: u32 },
-    /// the smallest aperture over the zone's points
-    Min,
+pub struct JointColumn {
+    pub zone: ZoneId,
+    pub point: ZonePoint,
+    /// index into `Mesh::zone_points` (None for `Min`)
+    pub site: Option<u32>,
 }
 
-impl JointColumnKind {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            JointColumnKind::Point { kind, .. } => kind.as_str(),
-            JointColumnKind::Min => "min",
-        }
-    }
-}
-
-/// One joint sample: aperture [m], state label, temperature [°C] (NaN without a thermal model).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-#[serde(into = "checkpoint::SampleRecord")]
+/// One joint sample: aperture [m], state, temperature [°C] (NaN without a thermal model).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointSample {
     pub aperture: f64,
-    pub state: &'static str,
+    pub state: JointState,
     pub temperature: f64,
 }
 
@@ -84,9 +79,8 @@ pub struct JointSample {
 /// per whole day; None where the zone's blocks do not both exist yet.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointRecords {
-    /// (joint, zone, kind) per column
-    pub columns: Vec<(u32, u32, JointColumnKind)>,
-    pub rows: Vec<(f64, Vec<Option<JointSample>>)>,
+    pub columns: Vec<JointColumn>,
+    pub rows: Vec<(Day, Vec<Option<JointSample>>)>,
 }
 
 /// Mean temperature of each grouting zone's concrete, per block side, one
@@ -96,7 +90,7 @@ pub struct ZoneTemps {
     /// the zones, in [`Mesh::zones`] order
     pub zones: Vec<ZoneExtent>,
     /// (day, [block A, block B] per zone)
-    pub rows: Vec<(f64, Vec<[f64; 2]>)>,
+    pub rows: Vec<(Day, Vec<[f64; 2]>)>,
 }
 
 /// Counters of one run: which systems were assembled and solved.
@@ -123,10 +117,9 @@ pub struct Simulation<'a> {
     pub records: ZoneRecords,
     pub joint_records: JointRecords,
     pub zone_temps: ZoneTemps,
-    pub snapshots: Vec<(f64, String)>,
     /// Keep a [`Checkpoint`] at the first whole day at least this many days
     /// after the last one (None: no checkpoints).
-    pub checkpoint_every: Option<f64>,
+    pub checkpoint_every: Option<i64>,
     pub checkpoints: Vec<Checkpoint>,
     /// Set from another thread to stop the run at the end of its current step
     /// with [`SimError::Cancelled`] (a what-if the engineer gave up on).
@@ -146,10 +139,10 @@ impl<'a> Simulation<'a> {
     /// if the scene switches on a thermal effect.
     pub fn new(scene: &'a Scene, mesh: &'a Mesh, schedules: &Schedules) -> Result<Self, SimError> {
         let epoch = scene.epoch;
-        let day = |d: NaiveDate| day_of(epoch, d);
+        let day = |d: NaiveDate| epoch.t(d);
         let mut tl = Timeline::default();
         for p in &schedules.pours {
-            tl.days.entry(day(p.date) as i64).or_default().pours.push((
+            tl.days.entry(epoch.day(p.date)).or_default().pours.push((
                 p.block,
                 p.lift,
                 p.placement_temp_c,
@@ -171,28 +164,34 @@ impl<'a> Simulation<'a> {
             .collect();
         if scene.has(Effect::PipeCooling) {
             for st in &stages {
-                tl.days.entry(st.start_day as i64).or_default().stage_change = true;
+                tl.days
+                    .entry(Day::containing(st.start_day))
+                    .or_default()
+                    .stage_change = true;
                 if let Some(end) = st.end_day {
-                    tl.days.entry(end as i64).or_default().stage_change = true;
+                    tl.days
+                        .entry(Day::containing(end))
+                        .or_default()
+                        .stage_change = true;
                 }
             }
         }
         if scene.has(Effect::Joints) {
             for g in &schedules.grouting {
                 tl.days
-                    .entry(day(g.planned) as i64)
+                    .entry(epoch.day(g.planned))
                     .or_default()
                     .grouting
-                    .push((g.joint, g.zone));
+                    .push(g.zone_id());
             }
         }
         for &d in &scene.output.snapshots {
-            tl.days.entry(day(d) as i64).or_default().snapshot = true;
+            tl.days.entry(epoch.day(d)).or_default().snapshot = true;
         }
-        let last_event = tl.days.keys().next_back().copied().unwrap_or(0);
+        let last_event = tl.days.keys().next_back().copied().unwrap_or_default();
         tl.end_day = match scene.time.end_date {
-            Some(end) => day(end) as i64,
-            None => last_event + 60,
+            Some(end) => epoch.day(end),
+            None => last_event.plus(60),
         };
         tl.days.retain(|&d, _| d <= tl.end_day);
 
@@ -240,23 +239,26 @@ impl<'a> Simulation<'a> {
         records.points = mesh
             .zone_points
             .iter()
-            .map(|p| (p.joint, p.zone, p.kind))
+            .map(|p| (ZoneId::new(p.joint, p.zone), p.point))
             .collect();
         let mut joint_records = JointRecords::default();
         if mechanics.as_ref().is_some_and(|m| !m.points.is_empty()) {
             for z in &mesh.zones {
+                let zone = ZoneId::new(z.joint, z.zone);
                 for (i, p) in mesh.zone_points.iter().enumerate() {
                     if p.joint == z.joint && p.zone == z.zone {
-                        let kind = JointColumnKind::Point {
-                            kind: p.kind,
-                            index: i as u32,
-                        };
-                        joint_records.columns.push((z.joint, z.zone, kind));
+                        joint_records.columns.push(JointColumn {
+                            zone,
+                            point: p.point,
+                            site: Some(i as u32),
+                        });
                     }
                 }
-                joint_records
-                    .columns
-                    .push((z.joint, z.zone, JointColumnKind::Min));
+                joint_records.columns.push(JointColumn {
+                    zone,
+                    point: ZonePoint::Min,
+                    site: None,
+                });
             }
         }
         Ok(Simulation {
@@ -274,7 +276,6 @@ impl<'a> Simulation<'a> {
                 zones: dam_layout(mesh).zones,
                 rows: Vec::new(),
             },
-            snapshots: Vec::new(),
             checkpoint_every: None,
             checkpoints: Vec::new(),
             cancel: None,
@@ -287,15 +288,15 @@ impl<'a> Simulation<'a> {
         })
     }
 
-    pub fn end_day(&self) -> f64 {
-        self.timeline.end_day as f64
+    pub fn end_day(&self) -> Day {
+        self.timeline.end_day
     }
 
     /// Makes each of `days` a step end, so the histories hold a row for it
     /// (the delay search reads daily rows, joint meters their dates).
-    pub fn observe_days(&mut self, days: &[i64]) {
+    pub fn observe_days(&mut self, days: &[Day]) {
         for &d in days {
-            if (0..=self.timeline.end_day).contains(&d) {
+            if (Day(0)..=self.timeline.end_day).contains(&d) {
                 self.timeline.days.entry(d).or_default();
             }
         }
@@ -303,12 +304,12 @@ impl<'a> Simulation<'a> {
 
     /// Stops the run at the start of `day` (its events applied and recorded)
     /// instead of the scene's end; never later than that end.
-    pub fn set_end_day(&mut self, day: i64) {
+    pub fn set_end_day(&mut self, day: Day) {
         self.timeline.end_day = self.timeline.end_day.min(day);
     }
 
     /// Applies the events of the current day (pours, stage changes).
-    fn apply_events(&mut self, snapshot_dir: Option<&Path>) -> Result<(), SimError> {
+    fn apply_events(&mut self, sink: Option<&mut SnapshotSink<'_>>) -> Result<(), SimError> {
         let Some(events) = self.timeline.at(self.day).cloned() else {
             return Ok(());
         };
@@ -319,8 +320,8 @@ impl<'a> Simulation<'a> {
             grouting,
         } = events;
         if let Some(m) = self.mechanics.as_mut() {
-            for (joint, zone) in grouting {
-                m.grout(joint, zone, self.day);
+            for z in grouting {
+                m.grout(z.joint, z.zone, self.day);
             }
         }
         let mut restart = stage_change;
@@ -340,25 +341,28 @@ impl<'a> Simulation<'a> {
         if restart {
             self.ladder.restart(&self.scene.time);
         }
-        if snapshot {
-            if let Some(dir) = snapshot_dir {
-                self.write_snapshot(dir)?;
-            }
+        if let (true, Some(sink)) = (snapshot, sink) {
+            let snap = self.snapshot();
+            sink(&snap).map_err(|source| SimError::Snapshot {
+                date: snap.date,
+                source,
+            })?;
         }
         Ok(())
     }
 
-    /// Runs to the end of the timeline. `snapshot_dir` receives VTU files on
-    /// snapshot dates; `progress` is called after each step with (day, end).
+    /// Runs to the end of the timeline. `snapshots` receives the fields on
+    /// the scene's snapshot dates; `progress` is called after each step with
+    /// (day, end).
     pub fn run(
         &mut self,
-        snapshot_dir: Option<&Path>,
+        mut snapshots: Option<&mut SnapshotSink<'_>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<RunStats, SimError> {
         let start = std::time::Instant::now();
-        let end = self.end_day();
+        let end = self.end_day().t();
         if self.events_pending {
-            self.apply_events(snapshot_dir)?;
+            self.apply_events(snapshots.as_deref_mut())?;
             self.begin_mechanical_step();
             self.record();
             self.events_pending = false;
@@ -369,9 +373,7 @@ impl<'a> Simulation<'a> {
                 .as_ref()
                 .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
             {
-                return Err(SimError::Cancelled(
-                    self.scene.epoch + chrono::Duration::days(self.day.floor() as i64),
-                ));
+                return Err(SimError::Cancelled(self.scene.epoch.date_at(self.day)));
             }
             let next = self.timeline.next_event_after(self.day);
             let dt = self.ladder.next_step(self.day, next);
@@ -392,7 +394,7 @@ impl<'a> Simulation<'a> {
             if self.day.fract() == 0.0 {
                 self.maybe_checkpoint();
             }
-            self.apply_events(snapshot_dir)?;
+            self.apply_events(snapshots.as_deref_mut())?;
             if self.day.fract() == 0.0 {
                 self.begin_mechanical_step();
                 self.record();
@@ -436,7 +438,7 @@ impl<'a> Simulation<'a> {
         m.step(self.mech_t0, t1, temps, level)
             .map_err(|source| SimError::MechanicsAt {
                 step: self.mech_steps,
-                date: self.scene.epoch + chrono::Duration::days(t1.floor() as i64),
+                date: self.scene.epoch.date_at(t1),
                 source,
             })
     }
@@ -453,7 +455,7 @@ impl<'a> Simulation<'a> {
                 .iter()
                 .map(|z| [side(z.lifts_a), side(z.lifts_b)])
                 .collect();
-            self.zone_temps.rows.push((self.day, row));
+            self.zone_temps.rows.push((Day::containing(self.day), row));
         }
         let Some(th) = &self.thermal else { return };
         let values = self
@@ -462,7 +464,7 @@ impl<'a> Simulation<'a> {
             .iter()
             .map(|p| th.point_temperature(self.mesh, p).unwrap_or(f64::NAN))
             .collect();
-        self.records.rows.push((self.day, values));
+        self.records.rows.push((Day::containing(self.day), values));
     }
 
     fn record_joints(&mut self) {
@@ -476,9 +478,9 @@ impl<'a> Simulation<'a> {
             })
         };
         let mut row = Vec::with_capacity(self.joint_records.columns.len());
-        for &(joint, zone, kind) in &self.joint_records.columns {
-            let sample = match kind {
-                JointColumnKind::Point { index, .. } => {
+        for col in &self.joint_records.columns {
+            let sample = match col.site {
+                Some(index) => {
                     let zp = &self.mesh.zone_points[index as usize];
                     m.point_aperture(self.mesh, zp)
                         .map(|(aperture, state)| JointSample {
@@ -491,30 +493,19 @@ impl<'a> Simulation<'a> {
                                 .unwrap_or(f64::NAN),
                         })
                 }
-                JointColumnKind::Min => {
-                    m.zone_min_aperture(joint, zone)
-                        .map(|(aperture, state, node)| JointSample {
-                            aperture,
-                            state,
-                            temperature: node_temp(node),
-                        })
-                }
+                None => m.zone_min_aperture(col.zone.joint, col.zone.zone).map(
+                    |(aperture, state, node)| JointSample {
+                        aperture,
+                        state,
+                        temperature: node_temp(node),
+                    },
+                ),
             };
             row.push(sample);
         }
-        self.joint_records.rows.push((self.day, row));
-    }
-
-    fn write_snapshot(&mut self, dir: &Path) -> Result<(), SimError> {
-        let date = self.scene.epoch + chrono::Duration::days(self.day as i64);
-        let name = format!("fields_{date}.vtu");
-        let path = dir.join(&name);
-        crate::output::snapshot::write(&path, self).map_err(|source| SimError::Snapshot {
-            path: path.display().to_string(),
-            source,
-        })?;
-        self.snapshots.push((self.day, name));
-        Ok(())
+        self.joint_records
+            .rows
+            .push((Day::containing(self.day), row));
     }
 }
 

@@ -9,6 +9,7 @@
 use std::collections::BTreeMap;
 
 use crate::scene::TimeStepping;
+use crate::vocab::{Day, ZoneId};
 
 /// What happens on one day.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -18,33 +19,34 @@ pub struct DayEvents {
     /// a cooling stage starts or ends
     pub stage_change: bool,
     pub snapshot: bool,
-    /// (joint, zone) grouted at the start of the day
-    pub grouting: Vec<(u32, u32)>,
+    /// zones grouted at the start of the day
+    pub grouting: Vec<ZoneId>,
 }
 
 /// Events keyed by whole day.
 #[derive(Debug, Clone, Default)]
 pub struct Timeline {
-    pub days: BTreeMap<i64, DayEvents>,
-    pub end_day: i64,
+    pub days: BTreeMap<Day, DayEvents>,
+    pub end_day: Day,
 }
 
 impl Timeline {
-    pub fn at(&self, day: f64) -> Option<&DayEvents> {
-        if day.fract() != 0.0 {
+    /// The events at time `t` [days], if `t` is a midnight that has any.
+    pub fn at(&self, t: f64) -> Option<&DayEvents> {
+        if t.fract() != 0.0 {
             return None;
         }
-        self.days.get(&(day as i64))
+        self.days.get(&Day::containing(t))
     }
 
-    /// First event day strictly after `day`, or the end.
-    pub fn next_event_after(&self, day: f64) -> f64 {
-        let floor = day.floor() as i64;
+    /// The time of the first event day strictly after time `t`, or the end.
+    pub fn next_event_after(&self, t: f64) -> f64 {
+        let next = Day::containing(t).plus(1);
         self.days
-            .range(floor + 1..)
+            .range(next..)
             .next()
-            .map(|(&d, _)| d.min(self.end_day) as f64)
-            .unwrap_or(self.end_day as f64)
+            .map(|(&d, _)| d.min(self.end_day).t())
+            .unwrap_or(self.end_day.t())
     }
 }
 
@@ -97,18 +99,18 @@ mod tests {
     fn ladder_hits_whole_days_and_events() {
         let cfg = TimeStepping::default(); // 0.25, ×2, max 4
         let mut tl = Timeline {
-            end_day: 30,
+            end_day: Day(30),
             ..Default::default()
         };
         tl.days.insert(
-            0,
+            Day(0),
             DayEvents {
                 stage_change: true,
                 ..Default::default()
             },
         );
         tl.days.insert(
-            10,
+            Day(10),
             DayEvents {
                 stage_change: true,
                 ..Default::default()

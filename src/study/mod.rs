@@ -12,6 +12,7 @@ use crate::app::{self, RunSummary};
 use crate::scene::{Scene, ThermalSolverKind};
 use crate::schedule::{self, SynthParams};
 use crate::sim::Simulation;
+use crate::vocab::Day;
 
 /// One line per run for the CLI.
 pub fn summary_line(s: &RunSummary) -> String {
@@ -81,7 +82,7 @@ pub fn perf(
             scene.solver.thermal = kind;
             let mut sim = Simulation::new(&scene, &mesh, &schedules)?;
             if let Some(days) = max_days {
-                sim.timeline.end_day = sim.timeline.end_day.min(days as i64);
+                sim.timeline.end_day = sim.timeline.end_day.min(Day(days as i64));
             }
             let stats = sim.run(None, &mut |_, _| {})?;
             let t = stats.thermal.unwrap_or_default();
@@ -293,7 +294,7 @@ fn load_or_synthesize(
 fn synthesize_for(scene: &Scene, mesh: &crate::mesh::Mesh) -> schedule::Schedules {
     let layout = app::dam_layout(mesh);
     let params = SynthParams {
-        start: scene.epoch + chrono::Duration::days(30),
+        start: scene.epoch.date(Day(30)),
         lift_interval_days: 12,
         ..SynthParams::default()
     };

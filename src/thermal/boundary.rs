@@ -4,6 +4,7 @@
 use chrono::{Datelike, NaiveDate};
 
 use crate::scene::{Air, Reservoir};
+use crate::vocab::Epoch;
 
 /// Piecewise-linear series of (day, value), days strictly increasing.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,9 +15,9 @@ pub struct Series {
 
 impl Series {
     /// Builds a series from dated rows; `epoch` is day 0.
-    pub fn from_dated(epoch: NaiveDate, rows: &[(NaiveDate, f64)]) -> Series {
+    pub fn from_dated(epoch: Epoch, rows: &[(NaiveDate, f64)]) -> Series {
         Series {
-            days: rows.iter().map(|(d, _)| day_of(epoch, *d)).collect(),
+            days: rows.iter().map(|(d, _)| epoch.t(*d)).collect(),
             values: rows.iter().map(|(_, v)| *v).collect(),
         }
     }
@@ -45,28 +46,23 @@ impl Series {
     }
 }
 
-/// Day number of `date` counted from `epoch`.
-pub fn day_of(epoch: NaiveDate, date: NaiveDate) -> f64 {
-    (date - epoch).num_days() as f64
-}
-
 /// Fractional day of year (1-based) of simulation day `day`.
-fn day_of_year(epoch: NaiveDate, day: f64) -> f64 {
+fn day_of_year(epoch: Epoch, day: f64) -> f64 {
     let whole = day.floor();
-    let date = epoch + chrono::Duration::days(whole as i64);
+    let date = epoch.date_at(whole);
     date.ordinal() as f64 + (day - whole)
 }
 
 /// Air temperature: weather.csv inside its date range, the scene's annual law outside.
 #[derive(Debug, Clone)]
 pub struct AirTemperature {
-    epoch: NaiveDate,
+    epoch: Epoch,
     law: Air,
     weather: Option<Series>,
 }
 
 impl AirTemperature {
-    pub fn new(epoch: NaiveDate, law: Air, weather: Option<Series>) -> Self {
+    pub fn new(epoch: Epoch, law: Air, weather: Option<Series>) -> Self {
         AirTemperature {
             epoch,
             law,
@@ -89,13 +85,13 @@ impl AirTemperature {
 /// Reservoir: level by date, water temperature by depth below the surface.
 #[derive(Debug, Clone)]
 pub struct Water {
-    epoch: NaiveDate,
+    epoch: Epoch,
     law: Reservoir,
     level: Series,
 }
 
 impl Water {
-    pub fn new(epoch: NaiveDate, law: Reservoir, level: Series) -> Self {
+    pub fn new(epoch: Epoch, law: Reservoir, level: Series) -> Self {
         Water { epoch, law, level }
     }
 
@@ -120,8 +116,8 @@ impl Water {
 mod tests {
     use super::*;
 
-    fn epoch() -> NaiveDate {
-        NaiveDate::from_ymd_opt(2024, 1, 1).unwrap()
+    fn epoch() -> Epoch {
+        Epoch(NaiveDate::from_ymd_opt(2024, 1, 1).unwrap())
     }
 
     #[test]

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::fem::solver::SolveError;
 use crate::material::{AdiabaticRise, ZhuPipe};
-use crate::mesh::{Mesh, Part, SurfaceKind, ZonePoint};
+use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::scene::{CapacityKind, Effect, Scene, ThermalSolverKind};
 
 use super::boundary::{AirTemperature, Water};
@@ -729,7 +729,7 @@ impl ThermalModel {
     }
 
     /// Temperature at a zone point (bilinear on the joint face), if its nodes are live.
-    pub fn point_temperature(&self, mesh: &Mesh, p: &ZonePoint) -> Option<f64> {
+    pub fn point_temperature(&self, mesh: &Mesh, p: &ZoneSite) -> Option<f64> {
         let pair = &mesh.face_pairs[p.pair as usize];
         let sys = self.sys.as_ref()?;
         let n = crate::mesh::quad_shape(p.s, p.t);

@@ -148,10 +148,11 @@ impl App {
     /// zone still to grout, else the bottom-left cell).
     pub(super) fn show(&mut self, data: Arc<RunData>) {
         let first = data
+            .run
             .plan
             .flagged()
             .next()
-            .or_else(|| data.plan.to_grout().next())
+            .or_else(|| data.run.plan.to_grout().next())
             .and_then(|z| data.grid.position(z.joint, z.zone));
         self.cursor = first.unwrap_or((0, 0));
         self.planning = None;
@@ -162,7 +163,7 @@ impl App {
     pub fn flagged(&self) -> Vec<&ZoneReadiness> {
         self.data
             .as_ref()
-            .map(|d| d.plan.flagged().collect())
+            .map(|d| d.run.plan.flagged().collect())
             .unwrap_or_default()
     }
 

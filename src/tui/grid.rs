@@ -7,6 +7,7 @@ use chrono::NaiveDate;
 use crate::planner::{Plan, Verdict};
 use crate::report::words::deciding_aperture;
 use crate::schedule::{DamLayout, Schedules};
+use crate::vocab::ZoneId;
 
 /// What a cell shows; the order is the legend's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -101,8 +102,10 @@ impl Grid {
                 joints
                     .iter()
                     .map(|&joint| {
-                        let ext = layout.zone(joint, zone)?;
-                        let planned = schedules.grouting_of(joint, zone).map(|g| g.planned);
+                        let ext = layout.zone(ZoneId::new(joint, zone))?;
+                        let planned = schedules
+                            .grouting_of(ZoneId::new(joint, zone))
+                            .map(|g| g.planned);
                         let r = plan
                             .zones
                             .iter()

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use crate::app::plan::PlanRequest;
 use crate::app::Inputs;
-use crate::planner::whatif::{self, WhatIf};
+use crate::planner::whatif::WhatIf;
 use crate::planner::Progress;
 use crate::schedule::{self, Schedules};
 use crate::sim::SimError;
@@ -157,21 +157,13 @@ impl Session {
         self.cancel = Some(cancel.clone());
         let tx = self.tx.clone();
         std::thread::spawn(move || {
-            let runner = data.runner();
             let mut last = f64::NEG_INFINITY;
-            let r = whatif::run(
-                &runner,
-                &data.layout,
-                data.plan.as_of,
-                &w,
-                Some(cancel),
-                &mut |day, end| {
-                    if day - last >= 1.0 || day >= end {
-                        last = day;
-                        let _ = tx.send((id, JobEvent::WhatIfProgress { day, end }));
-                    }
-                },
-            );
+            let r = data.run.what_if(&w, Some(cancel), &mut |day, end| {
+                if day - last >= 1.0 || day >= end {
+                    last = day;
+                    let _ = tx.send((id, JobEvent::WhatIfProgress { day, end }));
+                }
+            });
             let e = match r {
                 Ok(o) => JobEvent::WhatIfDone(Box::new(o)),
                 Err(SimError::Cancelled(_)) => JobEvent::WhatIfCancelled,

@@ -18,6 +18,7 @@ use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 use super::app::{App, Field, Pane, Prompt, Running, WhatIfForm, ZoneView};
 use super::event::{Command, Event, JobEvent};
 use crate::planner::whatif::WhatIf;
+use crate::vocab::ZoneId;
 
 impl App {
     /// Applies one event; returns the work the runtime must start.
@@ -196,7 +197,10 @@ impl App {
         let Some(view) = &mut self.zone else {
             return;
         };
-        let date = view.planned.unwrap_or(data.plan.as_of).max(data.plan.as_of);
+        let date = view
+            .planned
+            .unwrap_or(data.run.plan.as_of)
+            .max(data.run.plan.as_of);
         view.whatif = Some(WhatIfForm {
             field: Field::Supercool,
             supercool_c: 0.0,
@@ -213,7 +217,7 @@ impl App {
         let view = self.zone.as_mut()?;
         let (joint, zone) = (view.joint, view.zone);
         let form = view.whatif.as_mut()?;
-        let s = &data.plan.settings;
+        let s = &data.run.plan.settings;
         let running = form.running.is_some();
         let change = |form: &mut WhatIfForm, dir: i64, big: bool| {
             if running {
@@ -228,7 +232,7 @@ impl App {
                 }
                 Field::Date => {
                     let d = form.date + Duration::days(dir * if big { 7 } else { 1 });
-                    form.date = d.max(data.plan.as_of);
+                    form.date = d.max(data.run.plan.as_of);
                 }
             }
         };
@@ -313,9 +317,13 @@ impl App {
         self.zone = Some(ZoneView {
             joint,
             zone,
-            planned: data.schedules.grouting_of(joint, zone).map(|g| g.planned),
-            readiness: data.readiness(joint, zone).cloned(),
-            history: data.zone_history(joint, zone),
+            planned: data
+                .run
+                .schedules
+                .grouting_of(ZoneId::new(joint, zone))
+                .map(|g| g.planned),
+            readiness: data.run.readiness(ZoneId::new(joint, zone)).cloned(),
+            history: data.run.zone_history(ZoneId::new(joint, zone)),
             whatif: None,
         });
         self.pane = Pane::Zone;
@@ -392,7 +400,7 @@ impl App {
                     .and_then(|(c, r)| grid.cell(c, r))
                     .is_none()
                 {
-                    let zs = data.layout.zones_of(j);
+                    let zs = data.run.layout.zones_of(j);
                     return Err(format!(
                         "joint {j} has no zone {z} (zones {}–{})",
                         zs.first().unwrap_or(&0),

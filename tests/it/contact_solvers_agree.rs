@@ -18,7 +18,7 @@ use groutready::app;
 use groutready::scene::ContactSolverKind;
 use groutready::sim::{JointSample, Simulation};
 
-type History = Vec<(f64, Vec<Option<JointSample>>)>;
+type History = Vec<(groutready::vocab::Day, Vec<Option<JointSample>>)>;
 
 fn run(contact: ContactSolverKind, mu: f64, days: i64) -> History {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -30,7 +30,7 @@ fn run(contact: ContactSolverKind, mu: f64, days: i64) -> History {
     inputs.scene.joints.mu_static = mu;
     inputs.scene.joints.mu_kinetic = mu;
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
-    sim.timeline.end_day = days;
+    sim.timeline.end_day = groutready::vocab::Day(days);
     sim.run(None, &mut |_, _| {}).unwrap();
     sim.joint_records.rows
 }
@@ -50,7 +50,7 @@ fn compare(mu: f64, days: i64) -> (f64, usize, usize) {
                     samples += 1;
                     widest = widest.max(sa.aperture.abs());
                     diff = diff.max((sa.aperture - sq.aperture).abs());
-                    closed += usize::from(sa.state != "open");
+                    closed += usize::from(sa.state != groutready::vocab::JointState::Open);
                     differ += usize::from(sa.state != sq.state);
                 }
                 (None, None) => {}

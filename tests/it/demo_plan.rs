@@ -10,6 +10,7 @@ use groutready::app;
 use groutready::planner::rules::{HistoryIndex, Rules};
 use groutready::schedule;
 use groutready::sim::Simulation;
+use groutready::vocab::{Day, ZoneId};
 
 #[test]
 fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
@@ -44,19 +45,14 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
     let inputs = app::load_inputs(&root.join("models/demo_arch.toml"), None).unwrap();
     let remedied = schedule::load(&out.join("remedied")).unwrap();
     schedule::check_against(&remedied, &app::dam_layout(&inputs.mesh)).unwrap();
-    let days: HashMap<(u32, u32), f64> = remedied
+    let days: HashMap<ZoneId, Day> = remedied
         .grouting
         .iter()
-        .map(|g| {
-            (
-                (g.joint, g.zone),
-                (g.planned - inputs.scene.epoch).num_days() as f64,
-            )
-        })
+        .map(|g| (g.zone_id(), inputs.scene.epoch.day(g.planned)))
         .collect();
     let mut remedied_zones = Vec::new();
     for z in &flagged {
-        let key = (
+        let key = ZoneId::new(
             z["joint"].as_u64().unwrap() as u32,
             z["zone"].as_u64().unwrap() as u32,
         );
@@ -72,7 +68,7 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
     let end = remedied_zones
         .iter()
         .map(|(k, _)| days[k])
-        .fold(0.0, f64::max) as i64;
+        .fold(Day(0), Day::max);
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &remedied).unwrap();
     sim.set_end_day(end);
     sim.run(None, &mut |_, _| {}).unwrap();
@@ -86,8 +82,9 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
     );
     let history = sim.history();
     let idx = HistoryIndex::new(&history);
-    for ((j, z), choice) in &remedied_zones {
-        let r = rules.evaluate(&idx, *j, *z, days[&(*j, *z)], &days);
+    for (key, choice) in &remedied_zones {
+        let (j, z) = (key.joint, key.zone);
+        let r = rules.evaluate(&idx, *key, days[key], &days);
         println!(
             "joint {j} zone {z} ({choice}): {} on {}, min aperture {:?} mm",
             r.verdict.as_str(),

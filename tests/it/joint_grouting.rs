@@ -121,7 +121,7 @@ fn grouted_joint_cooled_below_the_bond_strength_holds_in_tension() {
             "{contact:?}: σxx in [{lo}, {hi}], expected {expected}"
         );
         for st in &m.state.joints {
-            assert_eq!(st.label(), "grouted");
+            assert_eq!(st.label(), groutready::vocab::JointState::Grouted);
         }
     }
 }
@@ -133,7 +133,11 @@ fn grouted_joint_cooled_beyond_the_bond_strength_cracks_and_reopens() {
         uniform_step(&mut m, &mesh, 1.0, 20.0, 10.0);
         let expected = ALPHA * 10.0 * L;
         for st in &m.state.joints {
-            assert_eq!(st.label(), "reopened", "{contact:?}: {st:?}");
+            assert_eq!(
+                st.label(),
+                groutready::vocab::JointState::Reopened,
+                "{contact:?}: {st:?}"
+            );
             assert_eq!(st.state, PointState::Open);
             assert!(
                 (st.aperture() - expected).abs() < 1e-9 * expected,

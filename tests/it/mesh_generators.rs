@@ -5,8 +5,9 @@ use std::collections::{HashMap, HashSet};
 use groutready::mesh::geometry::{ArchGeometry, BlocksGeometry};
 use groutready::mesh::{
     generate_arch, generate_blocks, hex_jacobian_det, hex_volume, quad_shape, write_pvd, write_vtu,
-    Mesh, MeshError, Part, PointKind, SurfaceKind, HEX_FACES,
+    Mesh, MeshError, Part, SurfaceKind, HEX_FACES,
 };
+use groutready::vocab::ZonePoint;
 
 fn blocks_geom(n_blocks: u32) -> BlocksGeometry {
     BlocksGeometry {
@@ -210,13 +211,13 @@ fn check_zone_points(m: &Mesh) {
     assert_eq!(m.zone_points.len(), 3 * m.zones.len());
     for z in &m.zones {
         let pts = m.zone_points_of(z.joint, z.zone);
-        let kinds: Vec<PointKind> = pts.iter().map(|p| p.kind).collect();
+        let kinds: Vec<ZonePoint> = pts.iter().map(|p| p.point).collect();
         assert_eq!(
             kinds,
             [
-                PointKind::Upstream,
-                PointKind::Center,
-                PointKind::Downstream
+                ZonePoint::Upstream,
+                ZonePoint::Center,
+                ZonePoint::Downstream
             ]
         );
         let zm = 0.5 * (z.z_bottom + z.z_top);
@@ -241,10 +242,11 @@ fn check_zone_points(m: &Mesh) {
                     .iter()
                     .any(|s| s.elem == fp.elem_a && s.face == face)
             };
-            match p.kind {
-                PointKind::Upstream => assert!(p.s == -1.0 && on_face(2)),
-                PointKind::Downstream => assert!(p.s == 1.0 && on_face(4)),
-                PointKind::Center => {}
+            match p.point {
+                ZonePoint::Upstream => assert!(p.s == -1.0 && on_face(2)),
+                ZonePoint::Downstream => assert!(p.s == 1.0 && on_face(4)),
+                ZonePoint::Center => {}
+                ZonePoint::Min => unreachable!("a zone site is a placed point"),
             }
         }
         let mid: Vec<f64> = (0..3)

@@ -13,21 +13,17 @@ use groutready::planner::edit::{self, Supercool};
 use groutready::planner::rules::{HistoryIndex, Rules};
 use groutready::schedule::{self, Schedules};
 use groutready::sim::Simulation;
+use groutready::vocab::{Day, ZoneId};
 
-fn days(inputs: &app::Inputs, s: &Schedules) -> HashMap<(u32, u32), f64> {
+fn days(inputs: &app::Inputs, s: &Schedules) -> HashMap<ZoneId, Day> {
     s.grouting
         .iter()
-        .map(|g| {
-            (
-                (g.joint, g.zone),
-                (g.planned - inputs.scene.epoch).num_days() as f64,
-            )
-        })
+        .map(|g| (g.zone_id(), inputs.scene.epoch.day(g.planned)))
         .collect()
 }
 
 /// Simulates `s` from scratch to `end` and checks (joint, zone) on its date.
-fn groutable(inputs: &app::Inputs, s: &Schedules, key: (u32, u32), end: i64) -> (bool, String) {
+fn groutable(inputs: &app::Inputs, s: &Schedules, key: ZoneId, end: Day) -> (bool, String) {
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, s).unwrap();
     sim.set_end_day(end);
     sim.run(None, &mut |_, _| {}).unwrap();
@@ -41,7 +37,7 @@ fn groutable(inputs: &app::Inputs, s: &Schedules, key: (u32, u32), end: i64) -> 
     );
     let h = sim.history();
     let d = days(inputs, s);
-    let r = rules.evaluate(&HistoryIndex::new(&h), key.0, key.1, d[&key], &d);
+    let r = rules.evaluate(&HistoryIndex::new(&h), key, d[&key], &d);
     (
         r.verdict.groutable(),
         format!(
@@ -62,13 +58,13 @@ fn supercooling_found_by_the_plan_is_the_least_that_works_from_scratch() {
     println!("{stdout}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    let cooled: Vec<((u32, u32), f64)> = json["zones"]
+    let cooled: Vec<(ZoneId, f64)> = json["zones"]
         .as_array()
         .unwrap()
         .iter()
         .filter(|z| z["remedy"]["choice"] == "supercool")
         .map(|z| {
-            let key = (
+            let key = ZoneId::new(
                 z["joint"].as_u64().unwrap() as u32,
                 z["zone"].as_u64().unwrap() as u32,
             );
@@ -85,23 +81,22 @@ fn supercooling_found_by_the_plan_is_the_least_that_works_from_scratch() {
     let remedied = schedule::load(&out.join("remedied")).unwrap();
     schedule::check_against(&remedied, &app::dam_layout(&inputs.mesh)).unwrap();
     let d = days(&inputs, &remedied);
-    let end = cooled.iter().map(|(k, _)| d[k]).fold(0.0, f64::max) as i64;
+    let end = cooled.iter().map(|(k, _)| d[k]).fold(Day(0), Day::max);
     for &(key, dt) in &cooled {
         let (ok, why) = groutable(&inputs, &remedied, key, end);
-        println!("joint {} zone {} with {dt} °C: {why}", key.0, key.1);
-        assert!(ok, "joint {} zone {} with {dt} °C: {why}", key.0, key.1);
+        println!("{key} with {dt} °C: {why}");
+        assert!(ok, "{key} with {dt} °C: {why}");
     }
 
     // One step less on the first zone (the others as proposed) is not enough.
     let step = inputs.scene.planner.supercooling_step_c;
     let (key, dt) = cooled[0];
     let as_of = chrono::NaiveDate::from_ymd_opt(2024, 6, 1).unwrap();
-    let planned = |k: (u32, u32)| inputs.schedules.grouting_of(k.0, k.1).unwrap().planned;
+    let planned = |k: ZoneId| inputs.schedules.grouting_of(k).unwrap().planned;
     let less: Vec<Supercool> = cooled
         .iter()
         .map(|&(k, t)| Supercool {
-            joint: k.0,
-            zone: k.1,
+            zone: k,
             delta_c: if k == key { t - step } else { t },
             planned: planned(k),
             from: as_of,
@@ -116,17 +111,6 @@ fn supercooling_found_by_the_plan_is_the_least_that_works_from_scratch() {
         above,
     );
     let (ok, why) = groutable(&inputs, &fewer, key, end);
-    println!(
-        "joint {} zone {} with {} °C: {why}",
-        key.0,
-        key.1,
-        dt - step
-    );
-    assert!(
-        !ok,
-        "{} °C would do for joint {} zone {}: {why}",
-        dt - step,
-        key.0,
-        key.1
-    );
+    println!("{key} with {} °C: {why}", dt - step);
+    assert!(!ok, "{} °C would do for {key}: {why}", dt - step);
 }

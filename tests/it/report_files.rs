@@ -6,10 +6,11 @@ use std::path::Path;
 
 use chrono::NaiveDate;
 use groutready::planner::{
-    Apertures, DelayOption, MeterComparison, Plan, PlanStats, PlannerSettings, Remedy,
-    RemedyChoice, Rule, RuleCheck, SupercoolOption, Verdict, ZoneHistory, ZoneReadiness,
+    Apertures, DelayOption, MeterComparison, Plan, PlanStats, Remedy, RemedyChoice, Rule,
+    RuleCheck, SupercoolOption, Verdict, ZoneHistory, ZoneReadiness,
 };
 use groutready::report::{self, charts, svg};
+use groutready::scene::PlannerSettings;
 
 fn date(s: &str) -> NaiveDate {
     s.parse().unwrap()
@@ -110,7 +111,7 @@ fn meter(
     MeterComparison {
         joint,
         zone,
-        point: point.into(),
+        point: groutready::vocab::ZonePoint::parse(point).expect("a point"),
         date: date(d),
         measured_mm: measured,
         predicted_mm: predicted,

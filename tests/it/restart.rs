@@ -10,8 +10,9 @@ use groutready::planner::edit;
 use groutready::schedule::Schedules;
 use groutready::sim::checkpoint::{read_file, write_file};
 use groutready::sim::{Checkpoint, History, Simulation};
+use groutready::vocab::{Day, ZoneId};
 
-const END: i64 = 200;
+const END: Day = Day(200);
 
 fn inputs() -> Inputs {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -28,7 +29,7 @@ fn run(
     let mesh = Box::leak(Box::new(inputs.mesh.clone()));
     let mut sim = Simulation::new(scene, mesh, s).unwrap();
     sim.set_end_day(END);
-    sim.checkpoint_every = Some(30.0);
+    sim.checkpoint_every = Some(30);
     if let Some((ck, h)) = restart {
         sim.restore(ck, h);
     }
@@ -39,7 +40,7 @@ fn run(
 /// Largest aperture difference relative to the widest aperture on the days
 /// both histories hold, number of such days, and the number of differing
 /// labels; and the largest temperature difference [°C].
-fn compare(a: &History, b: &History, from: f64) -> (f64, usize, usize, f64) {
+fn compare(a: &History, b: &History, from: Day) -> (f64, usize, usize, f64) {
     let widest = a
         .joint_records
         .rows
@@ -96,7 +97,7 @@ fn restart_with_the_same_schedules_repeats_the_run() {
     let ck = a
         .checkpoints
         .iter()
-        .find(|c| c.day >= 90.0)
+        .find(|c| c.day >= Day(90))
         .unwrap()
         .clone();
     // Through a file, as the weekly update reads it.
@@ -114,7 +115,7 @@ fn restart_with_the_same_schedules_repeats_the_run() {
 
     let b = run(&inputs, &inputs.schedules, Some((&back, &h)));
     let (diff, days, labels, dt) = compare(&a.history(), &b.history(), ck.day);
-    println!("same schedules, restart at day {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
+    println!("same schedules, restart at {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
     assert!(days > 50);
     assert_eq!(
         a.history().joint_records.rows.len(),
@@ -131,26 +132,36 @@ fn restart_before_an_edit_equals_the_edited_run_from_scratch() {
     let base = run(&inputs, &inputs.schedules, None);
     // Supercool zone 3 of joint 2 by 2 °C and move the grouting of zone 2 of
     // joint 3 ten days later: the weekly update of a site.
-    let g = inputs.schedules.grouting_of(3, 2).unwrap().planned;
-    let z = inputs.schedules.grouting_of(2, 3).unwrap().planned;
+    let g = inputs
+        .schedules
+        .grouting_of(ZoneId::new(3, 2))
+        .unwrap()
+        .planned;
+    let z = inputs
+        .schedules
+        .grouting_of(ZoneId::new(2, 3))
+        .unwrap()
+        .planned;
     let layout = app::dam_layout(&inputs.mesh);
     let (cooled, missing) = edit::supercool(
         &inputs.schedules,
         &layout,
         &[edit::Supercool {
-            joint: 2,
-            zone: 3,
+            zone: ZoneId::new(2, 3),
             delta_c: 2.0,
             planned: z,
-            from: inputs.scene.epoch + chrono::Duration::days(100),
+            from: inputs.scene.epoch.date(Day(100)),
         }],
         3,
     );
     assert!(missing.is_empty());
-    let edited = edit::regrout(&cooled, &[(3, 2, g + chrono::Duration::days(10))]);
+    let edited = edit::regrout(
+        &cooled,
+        &[(ZoneId::new(3, 2), g + chrono::Duration::days(10))],
+    );
     groutready::schedule::validate(&edited).unwrap();
     let first = edit::first_change(&inputs.schedules, &edited).unwrap();
-    let first_day = (first - inputs.scene.epoch).num_days() as f64;
+    let first_day = inputs.scene.epoch.day(first);
     let ck = base
         .checkpoints
         .iter()
@@ -158,12 +169,12 @@ fn restart_before_an_edit_equals_the_edited_run_from_scratch() {
         .find(|c| c.day <= first_day)
         .expect("a checkpoint before the edit")
         .clone();
-    assert!(ck.day > 0.0);
+    assert!(ck.day > Day(0));
 
     let scratch = run(&inputs, &edited, None);
     let restarted = run(&inputs, &edited, Some((&ck, &base.history())));
     let (diff, days, labels, dt) = compare(&scratch.history(), &restarted.history(), ck.day);
-    println!("edited on {first}, restart at day {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
+    println!("edited on {first}, restart at {}: {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C", ck.day);
     assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
     assert_eq!(labels, 0);
     assert!(dt <= 1e-9);

@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 
 use chrono::NaiveDate;
 use groutready::schedule::{
-    check_against, load, synthesize, validate, write_dir, DamLayout, MeterPoint, Schedules, Stage,
-    SynthParams, ZoneExtent,
+    check_against, load, synthesize, validate, write_dir, DamLayout, Schedules, Stage, SynthParams,
+    ZoneExtent,
 };
+use groutready::vocab::ZonePoint;
 use tempfile::TempDir;
 
 fn fixture() -> PathBuf {
@@ -529,7 +530,12 @@ fn small_set_loads() {
     assert_eq!(extra.line, 7);
 
     assert_eq!(s.grouting.len(), 3);
-    assert_eq!(s.grouting_of(1, 2).unwrap().planned, d(2025, 6, 1));
+    assert_eq!(
+        s.grouting_of(groutready::vocab::ZoneId::new(1, 2))
+            .unwrap()
+            .planned,
+        d(2025, 6, 1)
+    );
     assert_eq!(
         s.weather.as_deref(),
         Some(
@@ -542,7 +548,7 @@ fn small_set_loads() {
     );
     assert_eq!(s.reservoir.as_ref().unwrap()[1], (d(2025, 6, 1), 1120.0));
     let m = s.joint_meters.as_ref().unwrap();
-    assert_eq!((m[1].point, m[1].aperture_mm), (MeterPoint::Min, 0.35));
+    assert_eq!((m[1].point, m[1].aperture_mm), (ZonePoint::Min, 0.35));
     assert_eq!(s.event_span(), Some((d(2025, 1, 5), d(2025, 6, 1))));
 
     check_against(&s, &layout()).unwrap();

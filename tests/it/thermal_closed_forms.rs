@@ -451,7 +451,7 @@ fn air_law_without_weather_is_used() {
         warmest_day_of_year: 1.0,
         film_w_m2k: 10.0,
     };
-    let a = AirTemperature::new(date(2024, 1, 1), air, None);
+    let a = AirTemperature::new(groutready::vocab::Epoch(date(2024, 1, 1)), air, None);
     assert_eq!(a.at(17.5), 10.0);
 }
 

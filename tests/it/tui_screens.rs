@@ -191,13 +191,13 @@ fn whatif_supercooling_is_resimulated_shown_beside_the_plan_and_saved() {
     assert!(saved.join("cooling.csv").is_file(), "{:?}", s.app.status);
     let data = s.app.data.clone().unwrap();
     let edited = schedule::load(&saved).unwrap();
-    schedule::check_against(&edited, &data.layout).unwrap();
-    let changed = first_change(&data.schedules, &edited).expect("the cooling changed");
+    schedule::check_against(&edited, &data.run.layout).unwrap();
+    let changed = first_change(&data.run.schedules, &edited).expect("the cooling changed");
     assert!(
-        changed >= data.plan.as_of,
+        changed >= data.run.plan.as_of,
         "the past is not re-cooled: {changed}"
     );
-    assert_eq!(edited.grouting, data.schedules.grouting);
+    assert_eq!(edited.grouting, data.run.schedules.grouting);
     // Nothing half-written beside it.
     let names: Vec<String> = std::fs::read_dir(tmp.path().join("whatif"))
         .unwrap()
@@ -365,7 +365,7 @@ fn every_legend_state_has_its_cell_symbol_and_colour() {
     assert_eq!(count(&data.grid), [8, 0, 4, 4, 0, 0, 12]);
     // A grouted zone that re-opened, a marginal one, and a later as-of date
     // by which zones 5–7 are poured but beyond the plan.
-    let plan = &mut data.plan;
+    let plan = &mut data.run.plan;
     plan.zones.iter_mut().find(|z| z.history).unwrap().reopened = Some(common::date(2024, 6, 20));
     plan.zones
         .iter_mut()
@@ -373,7 +373,7 @@ fn every_legend_state_has_its_cell_symbol_and_colour() {
         .unwrap()
         .verdict = Verdict::Marginal;
     plan.as_of = common::date(2025, 6, 1);
-    data.grid = Grid::new(&data.layout, &data.schedules, &data.plan);
+    data.grid = Grid::new(&data.run.layout, &data.run.schedules, &data.run.plan);
     assert_eq!(count(&data.grid), [8, 1, 3, 3, 1, 12, 0]);
     let s = Session::open(data, true);
     let t = draw(&s.app, 80, 24);
@@ -439,12 +439,12 @@ fn joint_meter_readings_are_drawn_on_the_zone_chart() {
     use groutready::planner::MeterComparison;
     let p = common::small_plan();
     let mut data = RunData::load(&p.out).unwrap();
-    data.plan.meters = [(7, 1, 0.40, 0.52), (8, 15, 1.20, 1.28)]
+    data.run.plan.meters = [(7, 1, 0.40, 0.52), (8, 15, 1.20, 1.28)]
         .into_iter()
         .map(|(m, d, measured, predicted)| MeterComparison {
             joint: 1,
             zone: 4,
-            point: "center".into(),
+            point: groutready::vocab::ZonePoint::Center,
             date: common::date(2024, m, d),
             measured_mm: measured,
             predicted_mm: Some(predicted),

@@ -28,7 +28,7 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             .render(area, buf);
         return;
     }
-    let point = data.plan.settings.aperture_point;
+    let point = data.run.plan.settings.aperture_point;
     let rows_vis = table_area.height.saturating_sub(3) as usize;
     let first = if rows_vis == 0 {
         0

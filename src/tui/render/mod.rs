@@ -42,12 +42,12 @@ impl Widget for &App {
             }
             return;
         };
-        let s = Summary::of(&data.plan);
+        let s = Summary::of(&data.run.plan);
         Paragraph::new(Line::from(vec![
             Span::styled("groutready", theme.title()),
             Span::raw(format!(
                 " · {} · as of {} · {} of {} to grout flagged",
-                data.plan.scene, data.plan.as_of, s.flagged, s.to_grout
+                data.run.plan.scene, data.run.plan.as_of, s.flagged, s.to_grout
             )),
             Span::raw(if s.marginal > 0 {
                 format!(", {} marginal", s.marginal)

@@ -11,6 +11,7 @@ use crate::report::words::{mm, remedy_short, verdict_symbol, verdict_words};
 use crate::tui::app::App;
 use crate::tui::data::RunData;
 use crate::tui::grid::{Cell, CellState};
+use crate::vocab::ZoneId;
 
 /// Columns of the zone labels and of one cell (`✗0.40` and a space).
 const LABEL_W: u16 = 5;
@@ -156,7 +157,7 @@ fn render_info(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut B
     if let Some(p) = cell.planned {
         spans.push(Span::raw(format!(" · {p}")));
     }
-    match data.readiness(cell.joint, cell.zone) {
+    match data.run.readiness(ZoneId::new(cell.joint, cell.zone)) {
         Some(z) if !z.history => {
             spans.push(Span::raw(" · "));
             spans.push(Span::styled(

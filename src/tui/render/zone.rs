@@ -18,6 +18,7 @@ use crate::report::words::{
 };
 use crate::tui::app::{App, Field, WhatIfForm, ZoneView};
 use crate::tui::data::RunData;
+use crate::vocab::ZoneId;
 
 pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
     let Some(view) = &app.zone else {
@@ -42,7 +43,7 @@ fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
         format!("Joint {} zone {}", view.joint, view.zone),
         theme.title(),
     )];
-    let extent = data.zone_extent_text(view.joint, view.zone);
+    let extent = data.zone_extent_text(ZoneId::new(view.joint, view.zone));
     if !extent.is_empty() {
         spans.push(Span::raw(format!(" · {extent}")));
     }
@@ -97,14 +98,9 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             scatter: false,
         })
         .collect();
-    let point = data.plan.settings.aperture_point;
+    let point = data.run.plan.settings.aperture_point;
     if let Some(r) = result {
-        let v = match point {
-            crate::planner::DecidingPoint::Min => &r.history.min,
-            crate::planner::DecidingPoint::Upstream => &r.history.upstream,
-            crate::planner::DecidingPoint::Center => &r.history.center,
-            crate::planner::DecidingPoint::Downstream => &r.history.downstream,
-        };
+        let v = r.history.series(point);
         series.push(Series {
             name: "what-if",
             points: chart::points(&r.history, t0, v),
@@ -115,6 +111,7 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
     }
     // The site's joint meters on this zone, as measured.
     let meters: Vec<(f64, f64)> = data
+        .run
         .plan
         .meters
         .iter()
@@ -130,7 +127,7 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             scatter: true,
         });
     }
-    let s = &data.plan.settings;
+    let s = &data.run.plan.settings;
     let mark = result.map(|r| r.what_if.date).or(view.planned);
     chart::render(
         "mm",
@@ -234,6 +231,7 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
             )));
             lines.extend(rule_lines(r, theme));
             let meters: Vec<_> = data
+                .run
                 .plan
                 .meters
                 .iter()
@@ -271,12 +269,12 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
                     lines.push(Line::from(Span::styled(rem.note.clone(), theme.dim())));
                 }
             } else if r.verdict != Verdict::NotGroutable && !r.history {
-                let a = deciding_aperture(r, data.plan.settings.aperture_point);
+                let a = deciding_aperture(r, data.run.plan.settings.aperture_point);
                 lines.push(Line::default());
                 lines.push(Line::from(format!(
                     "{} mm at the {} point",
                     opt(a, mm),
-                    data.plan.settings.aperture_point.as_str()
+                    data.run.plan.settings.aperture_point.as_str()
                 )));
             }
         }
@@ -309,7 +307,7 @@ fn render_whatif(
         Constraint::Min(0),
     ])
     .areas(inner);
-    let s = &data.plan.settings;
+    let s = &data.run.plan.settings;
     let field = |f: Field, name: &str, value: String, hint: String| {
         let on = form.field == f;
         Line::from(vec![

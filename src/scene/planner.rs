@@ -1,28 +1,10 @@
-//! The scene's `[planner]` table: readiness rules, remedy limits and costs.
+//! The scene's `[planner]` table: the readiness rules' thresholds, remedy
+//! limits and costs. The data lives with the scene; the rules that read it
+//! live in `planner`.
 
 use serde::{Deserialize, Serialize};
 
-/// Which point of a zone decides the aperture rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum DecidingPoint {
-    /// the smallest aperture over the zone's joint points (default)
-    Min,
-    Upstream,
-    Center,
-    Downstream,
-}
-
-impl DecidingPoint {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            DecidingPoint::Min => "min",
-            DecidingPoint::Upstream => "upstream",
-            DecidingPoint::Center => "center",
-            DecidingPoint::Downstream => "downstream",
-        }
-    }
-}
+use crate::vocab::ZonePoint;
 
 /// Readiness rules and remedy search (`[planner]`, every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -35,7 +17,7 @@ pub struct PlannerSettings {
     pub marginal_aperture_mm: f64,
     /// Which point decides the aperture rule: `min` (default), `upstream`,
     /// `center` or `downstream`.
-    pub aperture_point: DecidingPoint,
+    pub aperture_point: ZonePoint,
     /// Closure (grouting) temperature of the concrete [°C]; default 13.
     pub closure_temp_c: f64,
     /// Optional closure temperature by elevation, `[[z_m, temp_c], ...]` with
@@ -77,7 +59,7 @@ impl Default for PlannerSettings {
         PlannerSettings {
             min_aperture_mm: 0.5,
             marginal_aperture_mm: 0.7,
-            aperture_point: DecidingPoint::Min,
+            aperture_point: ZonePoint::Min,
             closure_temp_c: 13.0,
             closure_temp_profile: Vec::new(),
             closure_tolerance_c: 1.0,
