@@ -170,17 +170,17 @@ pub fn first_change(a: &Schedules, b: &Schedules) -> Option<NaiveDate> {
     };
     diff_maps(&pours(a), &pours(b), |x| x.0, &mut at);
 
-    let grout = |s: &Schedules| -> BTreeMap<(u32, u32), NaiveDate> {
+    let grout = |s: &Schedules| -> BTreeMap<ZoneId, NaiveDate> {
         s.grouting
             .iter()
-            .map(|g| ((g.joint, g.zone), g.planned))
+            .map(|g| (g.zone_id(), g.planned))
             .collect()
     };
     diff_maps(&grout(a), &grout(b), |x| *x, &mut at);
 
     // A stage is its block, lifts, kind and start; the rest may change.
-    type ZoneId = (u32, u32, u32, u8, NaiveDate);
-    let stages = |s: &Schedules| -> BTreeMap<ZoneId, (Option<NaiveDate>, u64, Option<u64>)> {
+    type StageKey = (u32, u32, u32, u8, NaiveDate);
+    let stages = |s: &Schedules| -> BTreeMap<StageKey, (Option<NaiveDate>, u64, Option<u64>)> {
         s.cooling
             .iter()
             .map(|c| {

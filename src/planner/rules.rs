@@ -183,8 +183,8 @@ impl<'a> Rules<'a> {
             .max()
     }
 
-    /// Checks every rule for (joint, zone) grouted on `day`; `grout_day`
-    /// gives the grouting day of every zone as planned in the run.
+    /// Checks every rule for a zone grouted on `day`; `grout_day` gives the
+    /// grouting day of every zone as planned in the run.
     pub fn evaluate(
         &self,
         h: &HistoryIndex,
@@ -201,12 +201,49 @@ impl<'a> Rules<'a> {
             .unwrap_or((f64::NAN, f64::NAN));
         let closure = s.closure_temp_at(0.5 * (z_bottom + z_top));
         let apertures = h.apertures(id, day);
-        let mut checks = Vec::with_capacity(5);
-
-        // Aperture.
         let a = apertures.at(s.aperture_point);
+        let [ta, tb] = h.block_temps(id, day);
+        let age = self.youngest_age(ext.as_ref(), day);
+        let cover = self.cover_check(ext.as_ref(), z_top, day);
+        let cover_m = cover.value;
+        let checks = vec![
+            self.aperture_check(a),
+            self.temperature_check(h, ext.as_ref(), [ta, tb], closure),
+            self.age_check(age),
+            cover,
+            self.bottom_up_check(id, day, grout_day),
+        ];
+        let groutable = checks.iter().all(|c| c.passed);
+        let verdict = match (groutable, a) {
+            (false, _) => Verdict::NotGroutable,
+            (true, Some(v)) if v < s.marginal_aperture_mm => Verdict::Marginal,
+            _ => Verdict::Groutable,
+        };
+        ZoneReadiness {
+            joint: id.joint,
+            zone: id.zone,
+            planned: self.epoch.date(day),
+            history: false,
+            z_bottom_m: z_bottom,
+            z_top_m: z_top,
+            apertures_mm: apertures,
+            temp_a_c: ta,
+            temp_b_c: tb,
+            closure_temp_c: closure,
+            age_days: age,
+            cover_m,
+            checks,
+            verdict,
+            reopened: h.reopened_after(id, day).map(|d| self.epoch.date(d)),
+            remedy: None,
+        }
+    }
+
+    /// The deciding point's aperture against the least that takes grout.
+    fn aperture_check(&self, a: Option<f64>) -> RuleCheck {
+        let s = self.settings;
         let point = s.aperture_point.as_str();
-        checks.push(match a {
+        match a {
             Some(v) => RuleCheck {
                 rule: Rule::Aperture,
                 value: Some(v),
@@ -226,12 +263,20 @@ impl<'a> Rules<'a> {
                 passed: false,
                 reason: Some("the joint does not exist yet on this date (a block is not poured up to the zone)".into()),
             },
-        });
+        }
+    }
 
-        // Temperature.
-        let [ta, tb] = h.block_temps(id, day);
+    /// Each block's mean zone temperature against closure + tolerance.
+    fn temperature_check(
+        &self,
+        h: &HistoryIndex,
+        ext: Option<&ZoneExtent>,
+        [ta, tb]: [Option<f64>; 2],
+        closure: f64,
+    ) -> RuleCheck {
+        let s = self.settings;
         let limit = closure + s.closure_tolerance_c;
-        let temp_check = match (ta, tb, ext) {
+        match (ta, tb, ext) {
             (Some(ta), Some(tb), Some(e)) => {
                 let mut hot = Vec::new();
                 for (t, (block, ..)) in [(ta, e.lifts_a), (tb, e.lifts_b)] {
@@ -267,10 +312,12 @@ impl<'a> Rules<'a> {
                 passed: false,
                 reason: Some("the zone's concrete is not all poured on this date".into()),
             },
-        };
-        checks.push(temp_check);
+        }
+    }
 
-        // Age of the youngest lift.
+    /// The age of the zone's youngest lift (both blocks) on `day` [days];
+    /// None before every lift is poured.
+    fn youngest_age(&self, ext: Option<&ZoneExtent>, day: Day) -> Option<f64> {
         let youngest = ext.and_then(|e| {
             e.sides()
                 .iter()
@@ -279,8 +326,12 @@ impl<'a> Rules<'a> {
                 .collect::<Option<Vec<Day>>>()
                 .and_then(|v| v.into_iter().max())
         });
-        let age = youngest.map(|p| day.since(p) as f64).filter(|a| *a >= 0.0);
-        checks.push(RuleCheck {
+        youngest.map(|p| day.since(p) as f64).filter(|a| *a >= 0.0)
+    }
+
+    fn age_check(&self, age: Option<f64>) -> RuleCheck {
+        let s = self.settings;
+        RuleCheck {
             rule: Rule::Age,
             value: age,
             limit: s.min_age_days,
@@ -293,11 +344,13 @@ impl<'a> Rules<'a> {
                 )),
                 _ => None,
             },
-        });
+        }
+    }
 
-        // Cover above the zone.
-        let cover = ext.map(|e| self.cover(&e, z_top, day));
-        let cover_check = match cover {
+    /// The concrete above the zone on the blocks not yet complete.
+    fn cover_check(&self, ext: Option<&ZoneExtent>, z_top: f64, day: Day) -> RuleCheck {
+        let s = self.settings;
+        match ext.map(|e| self.cover(e, z_top, day)) {
             Some(Some((c, block))) => RuleCheck {
                 rule: Rule::Cover,
                 value: Some(c),
@@ -317,66 +370,41 @@ impl<'a> Rules<'a> {
                 passed: true,
                 reason: None, // both blocks complete: waived
             },
-        };
-        let cover_m = cover_check.value;
-        checks.push(cover_check);
+        }
+    }
 
-        // Bottom-up order.
-        checks.push(match self.zone_below(id) {
-            None => RuleCheck {
+    /// The next lower zone of the joint is grouted on or before `day`.
+    fn bottom_up_check(&self, id: ZoneId, day: Day, grout_day: &HashMap<ZoneId, Day>) -> RuleCheck {
+        let Some(below) = self.zone_below(id) else {
+            return RuleCheck {
                 rule: Rule::BottomUp,
                 value: None,
                 limit: 0.0,
                 passed: true,
                 reason: None,
-            },
-            Some(below) => match grout_day.get(&below) {
-                Some(&d) => RuleCheck {
-                    rule: Rule::BottomUp,
-                    value: Some(day.since(d) as f64),
-                    limit: 0.0,
-                    passed: d <= day,
-                    reason: (d > day).then(|| {
-                        format!(
-                            "zone {} below is grouted later ({})",
-                            below.zone,
-                            self.epoch.date(d)
-                        )
-                    }),
-                },
-                None => RuleCheck {
-                    rule: Rule::BottomUp,
-                    value: None,
-                    limit: 0.0,
-                    passed: false,
-                    reason: Some(format!("zone {} below has no grouting date", below.zone)),
-                },
-            },
-        });
-
-        let groutable = checks.iter().all(|c| c.passed);
-        let verdict = match (groutable, a) {
-            (false, _) => Verdict::NotGroutable,
-            (true, Some(v)) if v < s.marginal_aperture_mm => Verdict::Marginal,
-            _ => Verdict::Groutable,
+            };
         };
-        ZoneReadiness {
-            joint: id.joint,
-            zone: id.zone,
-            planned: self.epoch.date(day),
-            history: false,
-            z_bottom_m: z_bottom,
-            z_top_m: z_top,
-            apertures_mm: apertures,
-            temp_a_c: ta,
-            temp_b_c: tb,
-            closure_temp_c: closure,
-            age_days: age,
-            cover_m,
-            checks,
-            verdict,
-            reopened: h.reopened_after(id, day).map(|d| self.epoch.date(d)),
-            remedy: None,
+        match grout_day.get(&below) {
+            Some(&d) => RuleCheck {
+                rule: Rule::BottomUp,
+                value: Some(day.since(d) as f64),
+                limit: 0.0,
+                passed: d <= day,
+                reason: (d > day).then(|| {
+                    format!(
+                        "zone {} below is grouted later ({})",
+                        below.zone,
+                        self.epoch.date(d)
+                    )
+                }),
+            },
+            None => RuleCheck {
+                rule: Rule::BottomUp,
+                value: None,
+                limit: 0.0,
+                passed: false,
+                reason: Some(format!("zone {} below has no grouting date", below.zone)),
+            },
         }
     }
 

@@ -389,6 +389,9 @@ impl Bracket {
     }
 }
 
+/// Supercooling on the grid `k·step ≤ max`, all candidate zones in the
+/// same runs: one run at the largest ΔT brackets each zone, then each round
+/// halves every open bracket (see the module doc).
 fn supercool_search(
     ctx: &mut Ctx,
     base: &Schedules,
@@ -397,31 +400,7 @@ fn supercool_search(
     let s = ctx.rules.settings;
     let mut out: Found<SupercoolOption> = HashMap::new();
     let k_max = (s.max_supercooling_c / s.supercooling_step_c + 1e-9).floor() as u32;
-    let mut cands: Vec<&ZoneReadiness> = Vec::new();
-    for z in flagged {
-        let blocking: Vec<&str> = z
-            .checks
-            .iter()
-            .filter(|c| !c.passed && !matches!(c.rule, Rule::Aperture | Rule::Temperature))
-            .map(|c| c.rule.as_str())
-            .collect();
-        if !blocking.is_empty() {
-            out.insert(
-                z.zone_id(),
-                (
-                    None,
-                    format!("cooling cannot fix the {} rule", blocking.join(", ")),
-                ),
-            );
-        } else if k_max == 0 {
-            out.insert(
-                z.zone_id(),
-                (None, "supercooling is not allowed (max 0 °C)".into()),
-            );
-        } else {
-            cands.push(z);
-        }
-    }
+    let cands = supercool_candidates(flagged, k_max, &mut out);
     if cands.is_empty() {
         return Ok(out);
     }
@@ -452,6 +431,90 @@ fn supercool_search(
     let layout = ctx.layout;
     let build = |ks: &BTreeMap<ZoneId, u32>| edit::supercool(base, layout, &edits(ks), above);
 
+    let mut brackets = bracket_at_max(ctx, &cands, k_max, &span, &build, &mut out)?;
+    // Bracketed search on the grid, all zones in the same runs.
+    while brackets.values().any(Bracket::open) {
+        let ks: BTreeMap<ZoneId, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
+        let (sched, _) = build(&ks);
+        let h = ctx.run(
+            &format!("supercooling search, {} zones", brackets.len()),
+            &sched,
+            &span,
+        )?;
+        for (key, b) in brackets.iter_mut() {
+            if !b.open() {
+                continue;
+            }
+            let z = cands
+                .iter()
+                .find(|z| z.zone_id() == *key)
+                .expect("candidate");
+            let r = ctx.check(&h, &sched, *key, ctx.rules.epoch.day(z.planned));
+            b.update(ks[key], margins(&r), r.verdict.groutable());
+        }
+    }
+    for (key, b) in &brackets {
+        out.insert(
+            *key,
+            (
+                Some(SupercoolOption {
+                    delta_c: b.hi.0 as f64 * step,
+                    // the deciding aperture of the run that passed
+                    aperture_mm: b.hi.1[0] + s.min_aperture_mm,
+                }),
+                String::new(),
+            ),
+        );
+    }
+    Ok(out)
+}
+
+/// The flagged zones that supercooling may fix: those failing only the
+/// aperture and temperature rules; the others get their reason in `out`.
+fn supercool_candidates<'z>(
+    flagged: &'z [ZoneReadiness],
+    k_max: u32,
+    out: &mut Found<SupercoolOption>,
+) -> Vec<&'z ZoneReadiness> {
+    let mut cands: Vec<&ZoneReadiness> = Vec::new();
+    for z in flagged {
+        let blocking: Vec<&str> = z
+            .checks
+            .iter()
+            .filter(|c| !c.passed && !matches!(c.rule, Rule::Aperture | Rule::Temperature))
+            .map(|c| c.rule.as_str())
+            .collect();
+        if !blocking.is_empty() {
+            out.insert(
+                z.zone_id(),
+                (
+                    None,
+                    format!("cooling cannot fix the {} rule", blocking.join(", ")),
+                ),
+            );
+        } else if k_max == 0 {
+            out.insert(
+                z.zone_id(),
+                (None, "supercooling is not allowed (max 0 °C)".into()),
+            );
+        } else {
+            cands.push(z);
+        }
+    }
+    cands
+}
+
+/// Runs every candidate at the largest supercooling: the zones it makes
+/// groutable get a bracket [0, max]; the others their reason in `out`.
+fn bracket_at_max(
+    ctx: &mut Ctx,
+    cands: &[&ZoneReadiness],
+    k_max: u32,
+    span: &Span,
+    build: &dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>),
+    out: &mut Found<SupercoolOption>,
+) -> Result<BTreeMap<ZoneId, Bracket>, SimError> {
+    let step = ctx.rules.settings.supercooling_step_c;
     // Can the largest supercooling fix each zone at all?
     let all_max: BTreeMap<ZoneId, u32> = cands.iter().map(|z| (z.zone_id(), k_max)).collect();
     let (s_max, not_editable) = build(&all_max);
@@ -462,10 +525,10 @@ fn supercool_search(
             k_max as f64 * step
         ),
         &s_max,
-        &span,
+        span,
     )?;
     let mut brackets: BTreeMap<ZoneId, Bracket> = BTreeMap::new();
-    for z in &cands {
+    for z in cands {
         let key = z.zone_id();
         if not_editable.contains(&key) {
             out.insert(
@@ -502,41 +565,7 @@ fn supercool_search(
             );
         }
     }
-    // Bracketed search on the grid, all zones in the same runs.
-    while brackets.values().any(Bracket::open) {
-        let ks: BTreeMap<ZoneId, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
-        let (sched, _) = build(&ks);
-        let h = ctx.run(
-            &format!("supercooling search, {} zones", brackets.len()),
-            &sched,
-            &span,
-        )?;
-        for (key, b) in brackets.iter_mut() {
-            if !b.open() {
-                continue;
-            }
-            let z = cands
-                .iter()
-                .find(|z| z.zone_id() == *key)
-                .expect("candidate");
-            let r = ctx.check(&h, &sched, *key, ctx.rules.epoch.day(z.planned));
-            b.update(ks[key], margins(&r), r.verdict.groutable());
-        }
-    }
-    for (key, b) in &brackets {
-        out.insert(
-            *key,
-            (
-                Some(SupercoolOption {
-                    delta_c: b.hi.0 as f64 * step,
-                    // the deciding aperture of the run that passed
-                    aperture_mm: b.hi.1[0] + s.min_aperture_mm,
-                }),
-                String::new(),
-            ),
-        );
-    }
-    Ok(out)
+    Ok(brackets)
 }
 
 fn delay_search(

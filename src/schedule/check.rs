@@ -8,6 +8,8 @@ use std::collections::{BTreeMap, HashMap};
 
 use chrono::NaiveDate;
 
+use crate::vocab::ZoneId;
+
 use super::error::ScheduleError;
 use super::read::{cell_error, EXPECTED_ID};
 use super::write;
@@ -323,9 +325,9 @@ pub(crate) fn check_cooling(cooling: &[CoolingStage], pours: &[Pour]) -> Result<
 }
 
 pub(crate) fn check_grouting(grouting: &[GroutingPlan]) -> Result<(), ScheduleError> {
-    let mut seen: HashMap<(u32, u32), usize> = HashMap::with_capacity(grouting.len());
+    let mut seen: HashMap<ZoneId, usize> = HashMap::with_capacity(grouting.len());
     for g in grouting {
-        if let Some(first) = seen.insert((g.joint, g.zone), g.line) {
+        if let Some(first) = seen.insert(g.zone_id(), g.line) {
             return Err(ScheduleError::row(
                 GROUTING_CSV,
                 g.line,

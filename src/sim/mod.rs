@@ -15,7 +15,7 @@ use crate::schedule::{DamLayout, Schedules, ZoneExtent};
 use crate::thermal::boundary::{AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
-use crate::vocab::{Day, JointState, ZoneId, ZonePoint};
+use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 
 pub use checkpoint::{Checkpoint, History};
 
@@ -139,62 +139,8 @@ impl<'a> Simulation<'a> {
     /// if the scene switches on a thermal effect.
     pub fn new(scene: &'a Scene, mesh: &'a Mesh, schedules: &Schedules) -> Result<Self, SimError> {
         let epoch = scene.epoch;
-        let day = |d: NaiveDate| epoch.t(d);
-        let mut tl = Timeline::default();
-        for p in &schedules.pours {
-            tl.days.entry(epoch.day(p.date)).or_default().pours.push((
-                p.block,
-                p.lift,
-                p.placement_temp_c,
-            ));
-        }
-        let stages: Vec<PlannedStage> = schedules
-            .cooling
-            .iter()
-            .map(|c| PlannedStage {
-                block: c.block,
-                lift_from: c.lift_from,
-                lift_to: c.lift_to,
-                start_day: day(c.start),
-                end_day: c.end.map(day),
-                water_temp_c: c.water_temp_c,
-                target_temp_c: c.target_temp_c,
-                line: c.line,
-            })
-            .collect();
-        if scene.has(Effect::PipeCooling) {
-            for st in &stages {
-                tl.days
-                    .entry(Day::containing(st.start_day))
-                    .or_default()
-                    .stage_change = true;
-                if let Some(end) = st.end_day {
-                    tl.days
-                        .entry(Day::containing(end))
-                        .or_default()
-                        .stage_change = true;
-                }
-            }
-        }
-        if scene.has(Effect::Joints) {
-            for g in &schedules.grouting {
-                tl.days
-                    .entry(epoch.day(g.planned))
-                    .or_default()
-                    .grouting
-                    .push(g.zone_id());
-            }
-        }
-        for &d in &scene.output.snapshots {
-            tl.days.entry(epoch.day(d)).or_default().snapshot = true;
-        }
-        let last_event = tl.days.keys().next_back().copied().unwrap_or_default();
-        tl.end_day = match scene.time.end_date {
-            Some(end) => epoch.day(end),
-            None => last_event.plus(60),
-        };
-        tl.days.retain(|&d, _| d <= tl.end_day);
-
+        let stages = planned_stages(epoch, schedules);
+        let tl = Timeline::of(scene, schedules, &stages);
         let thermal = if scene.any_thermal() {
             let air = scene.air.clone().map(|law| {
                 AirTemperature::new(
@@ -235,32 +181,22 @@ impl<'a> Simulation<'a> {
             .reservoir
             .as_ref()
             .map(|r| Series::from_dated(epoch, r));
-        let mut records = ZoneRecords::default();
-        records.points = mesh
-            .zone_points
-            .iter()
-            .map(|p| (ZoneId::new(p.joint, p.zone), p.point))
-            .collect();
-        let mut joint_records = JointRecords::default();
-        if mechanics.as_ref().is_some_and(|m| !m.points.is_empty()) {
-            for z in &mesh.zones {
-                let zone = ZoneId::new(z.joint, z.zone);
-                for (i, p) in mesh.zone_points.iter().enumerate() {
-                    if p.joint == z.joint && p.zone == z.zone {
-                        joint_records.columns.push(JointColumn {
-                            zone,
-                            point: p.point,
-                            site: Some(i as u32),
-                        });
-                    }
-                }
-                joint_records.columns.push(JointColumn {
-                    zone,
-                    point: ZonePoint::Min,
-                    site: None,
-                });
-            }
-        }
+        let records = ZoneRecords {
+            points: mesh
+                .zone_points
+                .iter()
+                .map(|p| (ZoneId::new(p.joint, p.zone), p.point))
+                .collect(),
+            rows: Vec::new(),
+        };
+        let joint_records = JointRecords {
+            columns: if mechanics.as_ref().is_some_and(|m| !m.points.is_empty()) {
+                joint_columns(mesh)
+            } else {
+                Vec::new()
+            },
+            rows: Vec::new(),
+        };
         Ok(Simulation {
             scene,
             mesh,
@@ -507,6 +443,49 @@ impl<'a> Simulation<'a> {
             .rows
             .push((Day::containing(self.day), row));
     }
+}
+
+/// The cooling stages of `cooling.csv` as the thermal model runs them.
+fn planned_stages(epoch: Epoch, schedules: &Schedules) -> Vec<PlannedStage> {
+    let day = |d: NaiveDate| epoch.t(d);
+    schedules
+        .cooling
+        .iter()
+        .map(|c| PlannedStage {
+            block: c.block,
+            lift_from: c.lift_from,
+            lift_to: c.lift_to,
+            start_day: day(c.start),
+            end_day: c.end.map(day),
+            water_temp_c: c.water_temp_c,
+            target_temp_c: c.target_temp_c,
+            line: c.line,
+        })
+        .collect()
+}
+
+/// The columns of the joint history: per zone, its placed points (at their
+/// mesh sites) and its minimum.
+fn joint_columns(mesh: &Mesh) -> Vec<JointColumn> {
+    let mut columns = Vec::new();
+    for z in &mesh.zones {
+        let zone = z.zone_id();
+        for (i, p) in mesh.zone_points.iter().enumerate() {
+            if p.joint == z.joint && p.zone == z.zone {
+                columns.push(JointColumn {
+                    zone,
+                    point: p.point,
+                    site: Some(i as u32),
+                });
+            }
+        }
+        columns.push(JointColumn {
+            zone,
+            point: ZonePoint::Min,
+            site: None,
+        });
+    }
+    columns
 }
 
 /// What the schedules may refer to in this mesh: blocks with their lifts, and

@@ -8,7 +8,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::scene::TimeStepping;
+use crate::scene::{Effect, Scene, TimeStepping};
+use crate::schedule::Schedules;
+use crate::thermal::cooling::PlannedStage;
 use crate::vocab::{Day, ZoneId};
 
 /// What happens on one day.
@@ -31,6 +33,50 @@ pub struct Timeline {
 }
 
 impl Timeline {
+    /// The event days of a run: pours, cooling-stage starts and ends (with
+    /// pipe cooling), groutings (with joints) and snapshots, to the scene's
+    /// end date or 60 days after the last event.
+    pub fn of(scene: &Scene, schedules: &Schedules, stages: &[PlannedStage]) -> Timeline {
+        let epoch = scene.epoch;
+        let mut tl = Timeline::default();
+        for p in &schedules.pours {
+            tl.days.entry(epoch.day(p.date)).or_default().pours.push((
+                p.block,
+                p.lift,
+                p.placement_temp_c,
+            ));
+        }
+        if scene.has(Effect::PipeCooling) {
+            for st in stages {
+                let start = Day::containing(st.start_day);
+                tl.days.entry(start).or_default().stage_change = true;
+                if let Some(end) = st.end_day {
+                    tl.days
+                        .entry(Day::containing(end))
+                        .or_default()
+                        .stage_change = true;
+                }
+            }
+        }
+        if scene.has(Effect::Joints) {
+            for g in &schedules.grouting {
+                let day = tl.days.entry(epoch.day(g.planned)).or_default();
+                day.grouting.push(g.zone_id());
+            }
+        }
+        for &d in &scene.output.snapshots {
+            tl.days.entry(epoch.day(d)).or_default().snapshot = true;
+        }
+        let last_event = tl.days.keys().next_back().copied().unwrap_or_default();
+        tl.end_day = match scene.time.end_date {
+            Some(end) => epoch.day(end),
+            None => last_event.plus(60),
+        };
+        let end = tl.end_day;
+        tl.days.retain(|&d, _| d <= end);
+        tl
+    }
+
     /// The events at time `t` [days], if `t` is a midnight that has any.
     pub fn at(&self, t: f64) -> Option<&DayEvents> {
         if t.fract() != 0.0 {

@@ -439,7 +439,7 @@ impl App {
                 }
             }
             JobEvent::WhatIfDone(outcome) => {
-                let key = (outcome.what_if.joint, outcome.what_if.zone);
+                let key = outcome.what_if.zone_id();
                 if let Some(f) = self.form_of(key) {
                     f.running = None;
                     f.message = outcome.not_applied.clone();
@@ -480,9 +480,9 @@ impl App {
         self.zone.as_mut()?.whatif.as_mut()?.running.as_mut()
     }
 
-    fn form_of(&mut self, key: (u32, u32)) -> Option<&mut WhatIfForm> {
+    fn form_of(&mut self, key: ZoneId) -> Option<&mut WhatIfForm> {
         let z = self.zone.as_mut()?;
-        if (z.joint, z.zone) != key {
+        if ZoneId::new(z.joint, z.zone) != key {
             return None;
         }
         z.whatif.as_mut()
