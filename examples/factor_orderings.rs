@@ -23,11 +23,7 @@ fn main() -> anyhow::Result<()> {
         scalar(mesh)?;
     }
     let n = 3 * mesh.nodes.len();
-    let local: Vec<[u32; 24]> = mesh
-        .elements
-        .iter()
-        .map(|e| elasticity::element_dofs(e))
-        .collect();
+    let local: Vec<[u32; 24]> = mesh.elements.iter().map(elasticity::element_dofs).collect();
     let pattern = Arc::new(Pattern::new(n, &local));
     let mut a = SparseSym::new(pattern.clone());
     for (e, _) in mesh.elements.iter().enumerate() {

@@ -504,6 +504,10 @@ fn supercool_candidates<'z>(
     cands
 }
 
+/// Builds the schedules with each zone supercooled by its grid step count;
+/// returns them and the zones none of whose stages could be edited.
+type BuildSupercooled<'b> = dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>) + 'b;
+
 /// Runs every candidate at the largest supercooling: the zones it makes
 /// groutable get a bracket [0, max]; the others their reason in `out`.
 fn bracket_at_max(
@@ -511,7 +515,7 @@ fn bracket_at_max(
     cands: &[&ZoneReadiness],
     k_max: u32,
     span: &Span,
-    build: &dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>),
+    build: &BuildSupercooled,
     out: &mut Found<SupercoolOption>,
 ) -> Result<BTreeMap<ZoneId, Bracket>, SimError> {
     let step = ctx.rules.settings.supercooling_step_c;

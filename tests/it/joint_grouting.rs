@@ -10,6 +10,7 @@
 //!   year: every step settles in one or two passes, apertures and stresses
 //!   follow the closed forms, and the same scene in mm/MPa units gives the
 //!   same apertures.
+//!
 //! Both contact solvers (active set and the condensed cone program) run the
 //! grouting cases.
 

@@ -464,7 +464,7 @@ fn demo_arch_is_valid() {
         .filter(|p| p[0].abs() < 1e-9)
         .map(|p| p[1])
         .fold(f64::INFINITY, f64::min);
-    assert!(y_min <= -5.99 && y_min >= -6.0, "crown overhang {y_min}");
+    assert!((-6.0..=-5.99).contains(&y_min), "crown overhang {y_min}");
     check_all(&m, 3);
     check_arch_zone_points_on_radial_planes(&m, &p);
 }
