@@ -190,101 +190,23 @@ fn main() -> ExitCode {
     }
 }
 
+/// One function per subcommand; each returns the process exit code.
 fn dispatch(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Run {
             scene,
             schedules,
             out,
-        } => {
-            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
-            let out = out.unwrap_or_else(|| default_out(&scene));
-            let inputs = app::load_inputs(&scene, schedules.as_deref())?;
-            eprintln!(
-                "{}: {} elements, {} thermal dofs, {} pours, effects {:?}",
-                inputs.scene.name,
-                inputs.mesh.elements.len(),
-                inputs.mesh.n_thermal_dofs,
-                inputs.schedules.pours.len(),
-                inputs.scene.effects
-            );
-            let bar = groutready::progress::bar("simulating");
-            let summary = app::run(&inputs, &out, &mut |day, end| {
-                groutready::progress::update(&bar, day, end)
-            })
-            .with_context(|| format!("running {}", scene.display()))?;
-            bar.finish_and_clear();
-            print!("{}", groutready::study::summary_line(&summary));
-            println!("wrote {}", summary.out.display());
-            Ok(0)
-        }
+        } => run(scene, schedules, out),
         Command::Plan {
             scene,
             args,
             fail_on_flag,
-        } => {
-            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
-            let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
-            let inputs = app::load_inputs(&scene, args.schedules.as_deref())?;
-            eprintln!(
-                "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
-                inputs.scene.name,
-                inputs.mesh.elements.len(),
-                inputs.schedules.pours.len(),
-                inputs.schedules.grouting.len(),
-                inputs.scene.effects
-            );
-            let request = args.request();
-            let bar = groutready::progress::bar("simulating");
-            let summary = app::plan::plan(&inputs, &out, &request, &mut |p| match p {
-                groutready::planner::Progress::Baseline { day, end } => {
-                    groutready::progress::update(&bar, day, end)
-                }
-                groutready::planner::Progress::Resimulation(what) => {
-                    bar.set_message(format!("re-simulating: {what}"))
-                }
-            })
-            .with_context(|| format!("planning {}", scene.display()))?;
-            bar.finish_and_clear();
-            print!("{}", groutready::report::readiness_table(&summary.plan));
-            for (zone, why) in &summary.newly_flagged {
-                println!(
-                    "note: {zone} is no longer groutable once the remedies are applied: {why}"
-                );
-            }
-            let st = &summary.plan.stats;
-            println!(
-                "simulated in {:.1} s{} + {} re-simulations in {:.1} s; {} checkpoints kept",
-                st.baseline_seconds,
-                st.restarted_from
-                    .map(|d| format!(" (restarted from {d})"))
-                    .unwrap_or_default(),
-                st.resimulations,
-                st.resimulation_seconds,
-                summary.checkpoints_kept
-            );
-            if summary.remedied {
-                println!(
-                    "remedied schedules: {}",
-                    summary.out.join(app::plan::REMEDIED_DIR).display()
-                );
-            }
-            println!("wrote {}", summary.out.display());
-            let flagged = summary.plan.flagged().count();
-            Ok(if fail_on_flag && flagged > 0 {
-                EXIT_FLAGGED
-            } else {
-                0
-            })
-        }
+        } => plan(scene, &args, fail_on_flag),
         Command::Tui { target, args } => tui(target, args),
         Command::Study {
             what: StudyCommand::Restart { scene },
-        } => {
-            let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
-            groutready::study::restart::restart(&scene)?;
-            Ok(0)
-        }
+        } => study_restart(scene),
         Command::Study {
             what:
                 StudyCommand::Perf {
@@ -294,46 +216,147 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     solver,
                     complete_mechanics,
                 },
-        } => {
-            let defaults = scenes.is_empty();
-            let scenes = if defaults {
-                vec![bundled("models/demo_arch.toml")]
-            } else {
-                scenes
-            };
-            use groutready::scene::ThermalSolverKind as K;
-            let solvers = match solver.as_deref() {
-                None => vec![],
-                Some("cholesky") => vec![K::Cholesky],
-                Some("pcg") => vec![K::Pcg],
-                Some("both") => vec![K::Cholesky, K::Pcg],
-                Some(other) => {
-                    anyhow::bail!("--solver: expected cholesky, pcg or both, found {other:?}")
-                }
-            };
-            groutready::study::perf(&scenes, days, &solvers, complete_mechanics)?;
-            if defaults && !quick {
-                // The large arch's whole construction with mechanics takes
-                // hours: its first 40 days (17 mechanical steps on a 171k-dof
-                // system, about 2.5 min) and its complete-dam steps.
-                let large = [bundled("models/xiaowan_like.toml")];
-                groutready::study::perf(
-                    &large,
-                    Some(days.unwrap_or(40.0)),
-                    &solvers,
-                    complete_mechanics,
-                )?;
-            }
-            Ok(0)
-        }
+        } => study_perf(scenes, quick, days, solver.as_deref(), complete_mechanics),
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out },
-        } => {
-            let n = groutready::study::synth_schedules(&scene, &out)?;
-            println!("wrote {n} rows to {}", out.display());
-            Ok(0)
-        }
+        } => schedule_synth(&scene, &out),
     }
+}
+
+/// `groutready run`: simulate and write the run folder.
+fn run(
+    scene: Option<PathBuf>,
+    schedules: Option<PathBuf>,
+    out: Option<PathBuf>,
+) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    let out = out.unwrap_or_else(|| default_out(&scene));
+    let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+    eprintln!(
+        "{}: {} elements, {} thermal dofs, {} pours, effects {:?}",
+        inputs.scene.name,
+        inputs.mesh.elements.len(),
+        inputs.mesh.n_thermal_dofs,
+        inputs.schedules.pours.len(),
+        inputs.scene.effects
+    );
+    let bar = groutready::progress::bar("simulating");
+    let summary = app::run(&inputs, &out, &mut |day, end| {
+        groutready::progress::update(&bar, day, end)
+    })
+    .with_context(|| format!("running {}", scene.display()))?;
+    bar.finish_and_clear();
+    print!("{}", groutready::study::summary_line(&summary));
+    println!("wrote {}", summary.out.display());
+    Ok(0)
+}
+
+/// `groutready plan`: plan the zones, print the readiness table and what the
+/// run cost; exit [`EXIT_FLAGGED`] on request when a zone is not groutable.
+fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
+    let inputs = app::load_inputs(&scene, args.schedules.as_deref())?;
+    eprintln!(
+        "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
+        inputs.scene.name,
+        inputs.mesh.elements.len(),
+        inputs.schedules.pours.len(),
+        inputs.schedules.grouting.len(),
+        inputs.scene.effects
+    );
+    let request = args.request();
+    let bar = groutready::progress::bar("simulating");
+    let summary = app::plan::plan(&inputs, &out, &request, &mut |p| match p {
+        groutready::planner::Progress::Baseline { day, end } => {
+            groutready::progress::update(&bar, day, end)
+        }
+        groutready::planner::Progress::Resimulation(what) => {
+            bar.set_message(format!("re-simulating: {what}"))
+        }
+    })
+    .with_context(|| format!("planning {}", scene.display()))?;
+    bar.finish_and_clear();
+    print_plan(&summary);
+    let flagged = summary.plan.flagged().count();
+    Ok(if fail_on_flag && flagged > 0 {
+        EXIT_FLAGGED
+    } else {
+        0
+    })
+}
+
+/// The readiness table, the zones the remedies broke, what the plan cost and
+/// where it was written.
+fn print_plan(summary: &app::plan::PlanSummary) {
+    print!("{}", groutready::report::readiness_table(&summary.plan));
+    for (zone, why) in &summary.newly_flagged {
+        println!("note: {zone} is no longer groutable once the remedies are applied: {why}");
+    }
+    let st = &summary.plan.stats;
+    println!(
+        "simulated in {:.1} s{} + {} re-simulations in {:.1} s; {} checkpoints kept",
+        st.baseline_seconds,
+        st.restarted_from
+            .map(|d| format!(" (restarted from {d})"))
+            .unwrap_or_default(),
+        st.resimulations,
+        st.resimulation_seconds,
+        summary.checkpoints_kept
+    );
+    if summary.remedied {
+        println!(
+            "remedied schedules: {}",
+            summary.out.join(app::plan::REMEDIED_DIR).display()
+        );
+    }
+    println!("wrote {}", summary.out.display());
+}
+
+/// `groutready study restart`: time the weekly update.
+fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    groutready::study::restart::restart(&scene)?;
+    Ok(0)
+}
+
+/// `groutready study perf`: time the given scenes, or the demo and then the
+/// large arch.
+fn study_perf(
+    scenes: Vec<PathBuf>,
+    quick: bool,
+    days: Option<f64>,
+    solver: Option<&str>,
+    complete_mechanics: bool,
+) -> anyhow::Result<u8> {
+    let defaults = scenes.is_empty();
+    let scenes = if defaults {
+        vec![bundled("models/demo_arch.toml")]
+    } else {
+        scenes
+    };
+    let solvers = groutready::study::parse_solvers(solver)?;
+    groutready::study::perf(&scenes, days, &solvers, complete_mechanics)?;
+    if defaults && !quick {
+        // The large arch's whole construction with mechanics takes
+        // hours: its first 40 days (17 mechanical steps on a 171k-dof
+        // system, about 2.5 min) and its complete-dam steps.
+        let large = [bundled("models/xiaowan_like.toml")];
+        groutready::study::perf(
+            &large,
+            Some(days.unwrap_or(40.0)),
+            &solvers,
+            complete_mechanics,
+        )?;
+    }
+    Ok(0)
+}
+
+/// `groutready schedule synth`: write a plausible schedule set for a scene.
+fn schedule_synth(scene: &Path, out: &Path) -> anyhow::Result<u8> {
+    let n = groutready::study::synth_schedules(scene, out)?;
+    println!("wrote {n} rows to {}", out.display());
+    Ok(0)
 }
 
 fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {

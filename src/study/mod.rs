@@ -6,12 +6,12 @@ pub mod restart;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context;
-
-use crate::app::{self, RunSummary};
+use crate::app::{self, AppError, RunSummary};
+use crate::mechanics::MechError;
 use crate::scene::{Scene, ThermalSolverKind};
 use crate::schedule::{self, SynthParams};
-use crate::sim::Simulation;
+use crate::sim::{SimError, Simulation};
+use crate::thermal::ThermalError;
 use crate::vocab::Day;
 
 /// One line per run for the CLI.
@@ -35,6 +35,46 @@ pub fn summary_line(s: &RunSummary) -> String {
     out
 }
 
+/// What a study can fail on, with the scene or file it was working on.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error(transparent)]
+    App(#[from] AppError),
+    #[error("planning {scene}: {source}")]
+    Plan {
+        scene: String,
+        // Boxed: an `AppError` beside the scene's name would make every
+        // study result large.
+        source: Box<AppError>,
+    },
+    /// A staged run or a complete-dam step that failed while being timed.
+    #[error("timing {what}: {source}")]
+    Run { what: String, source: SimError },
+    #[error("{action} {path}: {source}")]
+    Io {
+        action: &'static str,
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("--solver: expected cholesky, pcg or both, found {0:?}")]
+    Solver(String),
+}
+
+/// The thermal solvers a `--solver` value names (`cholesky`, `pcg` or
+/// `both`); none means each scene's own.
+pub fn parse_solvers(value: Option<&str>) -> Result<Vec<ThermalSolverKind>, StudyError> {
+    use ThermalSolverKind as K;
+    match value {
+        None => Ok(vec![]),
+        Some("cholesky") => Ok(vec![K::Cholesky]),
+        Some("pcg") => Ok(vec![K::Pcg]),
+        Some("both") => Ok(vec![K::Cholesky, K::Pcg]),
+        Some(other) => Err(StudyError::Solver(other.to_string())),
+    }
+}
+
 /// Times the staged history of each scene (no files written), then the
 /// cost of one step of the complete dam (every lift live): its symbolic and
 /// numeric factorisation and the per-step solve, the figures that decide how
@@ -47,7 +87,7 @@ pub fn perf(
     max_days: Option<f64>,
     solvers: &[ThermalSolverKind],
     complete_mechanics: bool,
-) -> anyhow::Result<()> {
+) -> Result<(), StudyError> {
     println!(
         "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "scene/solver",
@@ -80,87 +120,139 @@ pub fn perf(
         for kind in kinds {
             let mut scene = scene0.clone();
             scene.solver.thermal = kind;
-            let mut sim = Simulation::new(&scene, &mesh, &schedules)?;
-            if let Some(days) = max_days {
-                sim.timeline.end_day = sim.timeline.end_day.min(Day(days as i64));
-            }
-            let stats = sim.run(None, &mut |_, _| {})?;
-            let t = stats.thermal.unwrap_or_default();
-            println!(
-                "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
-                format!("{stem}/{}", solver_name(kind)),
-                mesh.elements.len(),
-                mesh.n_thermal_dofs,
-                stats.pours,
-                stats.steps,
-                t.symbolic,
-                t.numeric,
-                stats.seconds,
-                1e3 * stats.seconds / stats.steps.max(1) as f64,
-                t.seconds_symbolic,
-                t.seconds_numeric,
-                t.seconds_solve,
-                t.seconds_assembly,
-            );
-            println!(
-                "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations",
-                "", load_s, sim.day, t.max_dofs, t.pcg_iterations
-            );
-            if let Some(m) = stats.mechanics {
-                println!(
-                    "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
-                    "",
-                    m.steps,
-                    m.max_dofs,
-                    m.symbolic,
-                    m.seconds_symbolic,
-                    m.numeric,
-                    m.seconds_numeric,
-                    m.seconds_solve,
-                    m.seconds_assembly,
-                    m.seconds_joints,
-                    m.contact_iterations,
-                    m.kept_closed_tension,
-                    1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints) / m.steps.max(1) as f64
-                );
-            }
-            let mech_dofs = 3 * mesh.nodes.len();
-            if scene.any_mechanical()
-                && !complete_mechanics
-                && mech_dofs > COMPLETE_MECHANICS_MAX_DOFS
-            {
-                println!(
-                    "{:<22} complete dam mechanics: skipped ({mech_dofs} dofs; --complete-mechanics times it: minutes, several GB)",
-                    ""
-                );
-            } else if scene.any_mechanical() {
-                let full = full_dam_mechanics_step_cost(&scene, &mesh)?;
-                println!(
-                    "{:<22} complete dam mechanics: {} dofs ({} joint pairs), symbolic {:.2} s, step {:.2} s ({} numeric factorisations, {} contact passes)",
-                    "",
-                    full.dofs,
-                    full.pairs,
-                    full.symbolic_s,
-                    full.step_s,
-                    full.numeric,
-                    full.passes
-                );
-            }
-            if scene.any_thermal() {
-                let full = full_dam_step_cost(&scene, &mesh, 10)?;
-                println!(
-                    "{:<22} complete dam: {} dofs, analysis {:.3} s, factorisation {:.3} s, solve {:.1} ms, step {:.1} ms",
-                    "",
-                    full.dofs,
-                    full.symbolic_s,
-                    full.numeric_s,
-                    1e3 * full.solve_s_per_step,
-                    1e3 * full.step_s
-                );
-            }
+            let timed = Timed {
+                path,
+                label: format!("{stem}/{}", solver_name(kind)),
+                scene: &scene,
+                mesh: &mesh,
+            };
+            timed.staged_run(&schedules, max_days, load_s)?;
+            timed.complete_dam(complete_mechanics)?;
         }
     }
     Ok(())
+}
+
+/// One scene with one thermal solver, as `perf` times it.
+struct Timed<'a> {
+    path: &'a Path,
+    /// `stem/solver`, the first column of the table
+    label: String,
+    scene: &'a Scene,
+    mesh: &'a crate::mesh::Mesh,
+}
+
+impl Timed<'_> {
+    /// Names the scene and solver in an error, so a failure among several
+    /// timed runs says which one.
+    fn run_err(&self, part: &str) -> impl FnOnce(SimError) -> StudyError + '_ {
+        let what = format!(
+            "{} ({}){part}",
+            self.path.display(),
+            solver_name(self.scene.solver.thermal)
+        );
+        move |source| StudyError::Run { what, source }
+    }
+
+    /// The staged history up to `max_days`: the table's row, then the load
+    /// time and solver counters, then the mechanics' own figures.
+    fn staged_run(
+        &self,
+        schedules: &schedule::Schedules,
+        max_days: Option<f64>,
+        load_s: f64,
+    ) -> Result<(), StudyError> {
+        let (scene, mesh) = (self.scene, self.mesh);
+        let mut sim = Simulation::new(scene, mesh, schedules).map_err(self.run_err(""))?;
+        if let Some(days) = max_days {
+            sim.timeline.end_day = sim.timeline.end_day.min(Day(days as i64));
+        }
+        let stats = sim.run(None, &mut |_, _| {}).map_err(self.run_err(""))?;
+        let t = stats.thermal.unwrap_or_default();
+        println!(
+            "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",
+            self.label,
+            mesh.elements.len(),
+            mesh.n_thermal_dofs,
+            stats.pours,
+            stats.steps,
+            t.symbolic,
+            t.numeric,
+            stats.seconds,
+            1e3 * stats.seconds / stats.steps.max(1) as f64,
+            t.seconds_symbolic,
+            t.seconds_numeric,
+            t.seconds_solve,
+            t.seconds_assembly,
+        );
+        println!(
+            "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations",
+            "", load_s, sim.day, t.max_dofs, t.pcg_iterations
+        );
+        if let Some(m) = stats.mechanics {
+            println!(
+                "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
+                "",
+                m.steps,
+                m.max_dofs,
+                m.symbolic,
+                m.seconds_symbolic,
+                m.numeric,
+                m.seconds_numeric,
+                m.seconds_solve,
+                m.seconds_assembly,
+                m.seconds_joints,
+                m.contact_iterations,
+                m.kept_closed_tension,
+                1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints) / m.steps.max(1) as f64
+            );
+        }
+        Ok(())
+    }
+
+    /// One step of the complete dam: mechanical (skipped above
+    /// [`COMPLETE_MECHANICS_MAX_DOFS`] unless `complete_mechanics`), then
+    /// thermal, for the scene's effects.
+    fn complete_dam(&self, complete_mechanics: bool) -> Result<(), StudyError> {
+        let (scene, mesh) = (self.scene, self.mesh);
+        let mech_dofs = 3 * mesh.nodes.len();
+        if scene.any_mechanical() && !complete_mechanics && mech_dofs > COMPLETE_MECHANICS_MAX_DOFS
+        {
+            println!(
+                "{:<22} complete dam mechanics: skipped ({mech_dofs} dofs; --complete-mechanics times it: minutes, several GB)",
+                ""
+            );
+        } else if scene.any_mechanical() {
+            let full = full_dam_mechanics_step_cost(scene, mesh)
+                .map_err(SimError::from)
+                .map_err(self.run_err(", complete dam mechanics"))?;
+            println!(
+                "{:<22} complete dam mechanics: {} dofs ({} joint pairs), symbolic {:.2} s, step {:.2} s ({} numeric factorisations, {} contact passes)",
+                "",
+                full.dofs,
+                full.pairs,
+                full.symbolic_s,
+                full.step_s,
+                full.numeric,
+                full.passes
+            );
+        }
+        if scene.any_thermal() {
+            let full = full_dam_step_cost(scene, mesh, 10)
+                .map_err(SimError::from)
+                .map_err(self.run_err(", complete dam"))?;
+            println!(
+                "{:<22} complete dam: {} dofs, analysis {:.3} s, factorisation {:.3} s, solve {:.1} ms, step {:.1} ms",
+                "",
+                full.dofs,
+                full.symbolic_s,
+                full.numeric_s,
+                1e3 * full.solve_s_per_step,
+                1e3 * full.step_s
+            );
+        }
+        Ok(())
+    }
 }
 
 fn solver_name(kind: ThermalSolverKind) -> &'static str {
@@ -194,7 +286,7 @@ pub fn full_dam_step_cost(
     scene: &Scene,
     mesh: &crate::mesh::Mesh,
     steps: usize,
-) -> anyhow::Result<FullDamCost> {
+) -> Result<FullDamCost, ThermalError> {
     let mut th = crate::thermal::ThermalModel::new(mesh, scene, Vec::new(), None, None)?;
     for (block, lift) in all_lifts(mesh) {
         th.pour(block, lift, 0.0, 15.0);
@@ -249,7 +341,7 @@ pub struct FullDamMechCost {
 pub fn full_dam_mechanics_step_cost(
     scene: &Scene,
     mesh: &crate::mesh::Mesh,
-) -> anyhow::Result<FullDamMechCost> {
+) -> Result<FullDamMechCost, MechError> {
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
         scene,
@@ -274,7 +366,7 @@ pub fn full_dam_mechanics_step_cost(
 /// Scene, mesh and schedules; schedules synthesised when the scene's folder is missing.
 fn load_or_synthesize(
     path: &Path,
-) -> anyhow::Result<(Scene, crate::mesh::Mesh, schedule::Schedules)> {
+) -> Result<(Scene, crate::mesh::Mesh, schedule::Schedules), StudyError> {
     let scene = Scene::load(path)?;
     if let Some(dir) = scene
         .schedules_dir(path)
@@ -316,11 +408,15 @@ fn synthesize_for(scene: &Scene, mesh: &crate::mesh::Mesh) -> schedule::Schedule
 }
 
 /// Writes a synthesised schedule set for a scene; returns the number of rows.
-pub fn synth_schedules(scene_path: &Path, out: &Path) -> anyhow::Result<usize> {
+pub fn synth_schedules(scene_path: &Path, out: &Path) -> Result<usize, StudyError> {
     let scene = Scene::load(scene_path)?;
     let mesh = app::build_mesh(&scene, &scene_path.display().to_string())?;
     let s = synthesize_for(&scene, &mesh);
-    schedule::write_dir(&s, out).with_context(|| format!("writing {}", out.display()))?;
+    schedule::write_dir(&s, out).map_err(|source| StudyError::Io {
+        action: "writing",
+        path: out.display().to_string(),
+        source,
+    })?;
     Ok(s.pours.len()
         + s.cooling.len()
         + s.grouting.len()

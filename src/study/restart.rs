@@ -5,11 +5,12 @@
 use std::path::Path;
 use std::time::Instant;
 
+use super::StudyError;
 use crate::app::{self, plan::PlanRequest};
 
 /// Prints the three timings and the largest aperture difference between the
 /// restarted and the from-scratch plan of the edited schedules.
-pub fn restart(scene: &Path) -> anyhow::Result<()> {
+pub fn restart(scene: &Path) -> Result<(), StudyError> {
     let mut inputs = app::load_inputs(scene, None)?;
     let tmp = tempfile_dir()?;
     let out = tmp.join("plan");
@@ -18,9 +19,12 @@ pub fn restart(scene: &Path) -> anyhow::Result<()> {
                 req: &PlanRequest,
                 out: &Path,
                 quiet: &mut dyn FnMut(crate::planner::Progress)|
-     -> anyhow::Result<(f64, crate::planner::Plan)> {
+     -> Result<(f64, crate::planner::Plan), StudyError> {
         let t = Instant::now();
-        let s = app::plan::plan(inputs, out, req, quiet)?;
+        let s = app::plan::plan(inputs, out, req, quiet).map_err(|source| StudyError::Plan {
+            scene: scene.display().to_string(),
+            source: Box::new(source),
+        })?;
         Ok((t.elapsed().as_secs_f64(), s.plan))
     };
     let scratch = PlanRequest {
@@ -75,8 +79,12 @@ pub fn restart(scene: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn tempfile_dir() -> anyhow::Result<std::path::PathBuf> {
+fn tempfile_dir() -> Result<std::path::PathBuf, StudyError> {
     let d = std::env::temp_dir().join(format!("groutready-study-{}", std::process::id()));
-    std::fs::create_dir_all(&d)?;
+    std::fs::create_dir_all(&d).map_err(|source| StudyError::Io {
+        action: "creating",
+        path: d.display().to_string(),
+        source,
+    })?;
     Ok(d)
 }

@@ -23,6 +23,19 @@ pub struct Series {
     pub scatter: bool,
 }
 
+impl Series {
+    /// A curve drawn as a line in the theme's `i`-th series colour and marker.
+    pub fn line(name: &'static str, points: Vec<(f64, f64)>, theme: &Theme, i: usize) -> Series {
+        Series {
+            name,
+            points,
+            style: theme.series(i),
+            marker: marker(theme, i),
+            scatter: false,
+        }
+    }
+}
+
 /// x of a date on the chart: days since `t0`.
 pub fn x(t0: NaiveDate, d: NaiveDate) -> f64 {
     (d - t0).num_days() as f64

@@ -11,14 +11,16 @@ use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
 
 use super::chart::{self, Series};
 use super::Theme;
-use crate::planner::{Rule, RuleCheck, Verdict, ZoneReadiness};
+use crate::planner::whatif::WhatIfOutcome;
+use crate::planner::{MeterComparison, Rule, RuleCheck, Verdict, ZoneHistory, ZoneReadiness};
 use crate::report::words::{
     deciding_aperture, max_block_temp, mm, opt, remedy_short, verdict_symbol, verdict_words,
     verified_words,
 };
+use crate::scene::PlannerSettings;
 use crate::tui::app::{App, Field, WhatIfForm, ZoneView};
 use crate::tui::data::RunData;
-use crate::vocab::ZoneId;
+use crate::vocab::{ZoneId, ZonePoint};
 
 pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
     let Some(view) = &app.zone else {
@@ -64,13 +66,11 @@ fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
     Paragraph::new(Line::from(spans)).render(area, buf);
 }
 
+/// The aperture chart over the temperature chart, from the zone's first
+/// history date to the latest of its last, planned and what-if dates.
 fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
     let h = &view.history;
-    let result = view
-        .whatif
-        .as_ref()
-        .and_then(|f| f.result.as_ref())
-        .filter(|r| (r.what_if.joint, r.what_if.zone) == (view.joint, view.zone));
+    let result = whatif_result(view);
     let (Some(&t0), Some(&last)) = (h.dates.first(), h.dates.last()) else {
         Paragraph::new("The zone has no history yet: its blocks are not both poured.")
             .block(Block::bordered())
@@ -86,36 +86,73 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
     }
     let [top, bottom] =
         Layout::vertical([Constraint::Percentage(58), Constraint::Percentage(42)]).areas(area);
+    let s = &data.run.plan.settings;
+    let mark = result.map(|r| r.what_if.date).or(view.planned);
+    chart::render(
+        "mm",
+        "mm",
+        t0,
+        t1,
+        &aperture_series(view, data, result, theme, t0),
+        Some(("limit", s.min_aperture_mm)),
+        mark,
+        theme,
+        top,
+        buf,
+    );
+    let closure = view
+        .readiness
+        .as_ref()
+        .map_or(s.closure_temp_c, |r| r.closure_temp_c);
+    chart::render(
+        "°C",
+        "°C",
+        t0,
+        t1,
+        &temperature_series(h, result, theme, t0),
+        Some(("closure", closure)),
+        mark,
+        theme,
+        bottom,
+        buf,
+    );
+}
+
+/// The what-if's outcome, only while it is this zone's: the form keeps it
+/// when the view moves to another zone.
+fn whatif_result(view: &ZoneView) -> Option<&WhatIfOutcome> {
+    view.whatif
+        .as_ref()
+        .and_then(|f| f.result.as_deref())
+        .filter(|r| (r.what_if.joint, r.what_if.zone) == (view.joint, view.zone))
+}
+
+/// The zone's three aperture points, the what-if's at the plan's deciding
+/// point, and the site's joint meters on this zone, as measured.
+fn aperture_series(
+    view: &ZoneView,
+    data: &RunData,
+    result: Option<&WhatIfOutcome>,
+    theme: &Theme,
+    t0: NaiveDate,
+) -> Vec<Series> {
+    let h = &view.history;
     let names = ["up", "ctr", "down"];
     let mut series: Vec<Series> = [&h.upstream, &h.center, &h.downstream]
         .iter()
         .enumerate()
-        .map(|(i, v)| Series {
-            name: names[i],
-            points: chart::points(h, t0, v),
-            style: theme.series(i),
-            marker: chart::marker(theme, i),
-            scatter: false,
-        })
+        .map(|(i, v)| Series::line(names[i], chart::points(h, t0, v), theme, i))
         .collect();
-    let point = data.run.plan.settings.aperture_point;
     if let Some(r) = result {
-        let v = r.history.series(point);
-        series.push(Series {
-            name: "what-if",
-            points: chart::points(&r.history, t0, v),
-            style: theme.series(3),
-            marker: chart::marker(theme, 3),
-            scatter: false,
-        });
+        let v = r.history.series(data.run.plan.settings.aperture_point);
+        series.push(Series::line(
+            "what-if",
+            chart::points(&r.history, t0, v),
+            theme,
+            3,
+        ));
     }
-    // The site's joint meters on this zone, as measured.
-    let meters: Vec<(f64, f64)> = data
-        .run
-        .plan
-        .meters
-        .iter()
-        .filter(|m| (m.joint, m.zone) == (view.joint, view.zone))
+    let meters: Vec<(f64, f64)> = zone_meters(view, data)
         .map(|m| (chart::x(t0, m.date), m.measured_mm))
         .collect();
     if !meters.is_empty() {
@@ -127,52 +164,45 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
             scatter: true,
         });
     }
-    let s = &data.run.plan.settings;
-    let mark = result.map(|r| r.what_if.date).or(view.planned);
-    chart::render(
-        "mm",
-        "mm",
-        t0,
-        t1,
-        &series,
-        Some(("limit", s.min_aperture_mm)),
-        mark,
+    series
+}
+
+/// The zone's mean temperature, and the what-if's.
+fn temperature_series(
+    h: &ZoneHistory,
+    result: Option<&WhatIfOutcome>,
+    theme: &Theme,
+    t0: NaiveDate,
+) -> Vec<Series> {
+    let mut temps = vec![Series::line(
+        "zone",
+        chart::points(h, t0, &h.temperature),
         theme,
-        top,
-        buf,
-    );
-    let closure = view
-        .readiness
-        .as_ref()
-        .map_or(s.closure_temp_c, |r| r.closure_temp_c);
-    let mut temps = vec![Series {
-        name: "zone",
-        points: chart::points(h, t0, &h.temperature),
-        style: theme.series(1),
-        marker: chart::marker(theme, 1),
-        scatter: false,
-    }];
+        1,
+    )];
     if let Some(r) = result {
-        temps.push(Series {
-            name: "what-if",
-            points: chart::points(&r.history, t0, &r.history.temperature),
-            style: theme.series(3),
-            marker: chart::marker(theme, 3),
-            scatter: false,
-        });
+        temps.push(Series::line(
+            "what-if",
+            chart::points(&r.history, t0, &r.history.temperature),
+            theme,
+            3,
+        ));
     }
-    chart::render(
-        "°C",
-        "°C",
-        t0,
-        t1,
-        &temps,
-        Some(("closure", closure)),
-        mark,
-        theme,
-        bottom,
-        buf,
-    );
+    temps
+}
+
+/// The site's joint-meter readings on the zone: the aperture chart draws
+/// them, the rules pane sums up their error.
+fn zone_meters<'a>(
+    view: &ZoneView,
+    data: &'a RunData,
+) -> impl Iterator<Item = &'a MeterComparison> {
+    let here = (view.joint, view.zone);
+    data.run
+        .plan
+        .meters
+        .iter()
+        .filter(move |m| (m.joint, m.zone) == here)
 }
 
 /// "0.40 mm ≥ 0.50", "16.9 °C ≤ 13.5", … for a rule's value and limit.
@@ -230,13 +260,7 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
                 theme.title(),
             )));
             lines.extend(rule_lines(r, theme));
-            let meters: Vec<_> = data
-                .run
-                .plan
-                .meters
-                .iter()
-                .filter(|m| (m.joint, m.zone) == (view.joint, view.zone))
-                .collect();
+            let meters: Vec<_> = zone_meters(view, data).collect();
             if !meters.is_empty() {
                 let errors: Vec<f64> = meters
                     .iter()
@@ -290,6 +314,8 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
         .render(area, buf);
 }
 
+/// The what-if form: its two fields, the re-simulation's progress or last
+/// message, and the plan's answer beside the what-if's.
 fn render_whatif(
     view: &ZoneView,
     form: &WhatIfForm,
@@ -308,6 +334,21 @@ fn render_whatif(
     ])
     .areas(inner);
     let s = &data.run.plan.settings;
+    Paragraph::new(whatif_fields(view, form, s, theme)).render(fields, buf);
+    render_whatif_progress(form, theme, progress, buf);
+    Paragraph::new(whatif_comparison(view, form, s.aperture_point, theme))
+        .wrap(Wrap { trim: true })
+        .render(compare, buf);
+}
+
+/// The supercooling and the grouting date, each with the limit or the plan
+/// it is edited against; the selected one marked.
+fn whatif_fields(
+    view: &ZoneView,
+    form: &WhatIfForm,
+    s: &PlannerSettings,
+    theme: &Theme,
+) -> Vec<Line<'static>> {
     let field = |f: Field, name: &str, value: String, hint: String| {
         let on = form.field == f;
         Line::from(vec![
@@ -325,7 +366,7 @@ fn render_whatif(
         ])
     };
     let planned = view.planned.map(|p| p.to_string()).unwrap_or("–".into());
-    Paragraph::new(vec![
+    vec![
         field(
             Field::Supercool,
             "supercool",
@@ -339,17 +380,19 @@ fn render_whatif(
             format!("plan {}", planned.get(5..).unwrap_or(&planned)),
         ),
         Line::from(Span::styled("Enter run · c cancel · s save", theme.dim())),
-    ])
-    .render(fields, buf);
+    ]
+}
 
+/// A gauge while the what-if re-simulates, else its last message, else how
+/// long the last re-simulation took.
+fn render_whatif_progress(form: &WhatIfForm, theme: &Theme, area: Rect, buf: &mut Buffer) {
     if let Some(r) = &form.running {
         let label = if r.cancelling {
             "cancelling…".to_string()
         } else {
             format!("re-simulating {:.0}%", r.fraction() * 100.0)
         };
-        let [gauge, _] =
-            Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(progress);
+        let [gauge, _] = Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(area);
         Gauge::default()
             .ratio(r.fraction())
             .label(label)
@@ -358,16 +401,25 @@ fn render_whatif(
     } else if let Some(m) = &form.message {
         Paragraph::new(Span::styled(m.clone(), theme.key()))
             .wrap(Wrap { trim: true })
-            .render(progress, buf);
+            .render(area, buf);
     } else if let Some(r) = &form.result {
         Paragraph::new(Span::styled(
             format!("re-simulated in {:.1} s", r.seconds),
             theme.dim(),
         ))
-        .render(progress, buf);
+        .render(area, buf);
     }
+}
 
-    let point = s.aperture_point;
+/// The plan's and the what-if's aperture, hottest block, date and verdict
+/// in two columns, then why the what-if is not groutable and which zones
+/// above moved with it.
+fn whatif_comparison(
+    view: &ZoneView,
+    form: &WhatIfForm,
+    point: ZonePoint,
+    theme: &Theme,
+) -> Vec<Line<'static>> {
     let plan = view.readiness.as_ref();
     let result = form.result.as_ref().map(|r| &r.readiness);
     let a = |z: Option<&ZoneReadiness>| {
@@ -427,7 +479,5 @@ fn render_whatif(
             )));
         }
     }
-    Paragraph::new(lines)
-        .wrap(Wrap { trim: true })
-        .render(compare, buf);
+    lines
 }
