@@ -219,7 +219,8 @@ impl<'a> Simulation<'a> {
             } else {
                 None
             };
-            Some(ThermalModel::new(mesh, scene, stages, air, water)?)
+            let settings = crate::thermal::ThermalSettings::from_scene(scene);
+            Some(ThermalModel::new(mesh, &settings, stages, air, water)?)
         } else {
             None
         };

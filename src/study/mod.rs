@@ -194,7 +194,8 @@ pub fn full_dam_step_cost(
     mesh: &crate::mesh::Mesh,
     steps: usize,
 ) -> anyhow::Result<FullDamCost> {
-    let mut th = crate::thermal::ThermalModel::new(mesh, scene, Vec::new(), None, None)?;
+    let settings = crate::thermal::ThermalSettings::from_scene(scene);
+    let mut th = crate::thermal::ThermalModel::new(mesh, &settings, Vec::new(), None, None)?;
     for (block, lift) in all_lifts(mesh) {
         th.pour(block, lift, 0.0, 15.0);
     }

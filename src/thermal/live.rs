@@ -114,6 +114,27 @@ pub struct LiveSystem {
 }
 
 impl LiveSystem {
+    /// The system of no live element over `n_dofs` thermal dofs: what a model
+    /// holds until its first rebuild, so that no dof reads as live before then.
+    pub fn empty(n_dofs: usize) -> LiveSystem {
+        let pattern = Arc::new(Pattern::new(0, &[] as &[[u32; 8]]));
+        LiveSystem {
+            dofs: Vec::new(),
+            index_of: vec![NONE; n_dofs],
+            elems: Vec::new(),
+            local_dofs: Vec::new(),
+            exposed: Vec::new(),
+            kh: SparseSym::new(pattern.clone()),
+            pattern,
+            cap_lumped: Vec::new(),
+            cap_consistent: None,
+            air_load: Vec::new(),
+            fixed: Vec::new(),
+            solver: None,
+            factors: Vec::new(),
+        }
+    }
+
     /// Builds the numbering, pattern and symbolic factorisation for `live_elems`.
     pub fn new(
         dof_xyz: &[[f64; 3]],

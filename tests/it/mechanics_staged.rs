@@ -7,7 +7,7 @@ use groutready::material::AdiabaticRise;
 use groutready::mechanics::{MechanicsModel, Supports};
 use groutready::mesh::Mesh;
 use groutready::thermal::boundary::AirTemperature;
-use groutready::thermal::ThermalModel;
+use groutready::thermal::{ThermalModel, ThermalSettings};
 
 const MECH: &str =
     "modulus = { e0_pa = 3.0e10, a = 0.40, b = 0.34 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
@@ -54,7 +54,14 @@ fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
     );
     let mesh = blocks_mesh(&sc);
     let air = AirTemperature::new(sc.epoch, sc.air.clone().unwrap(), None);
-    let mut th = ThermalModel::new(&mesh, &sc, vec![], Some(air), None).unwrap();
+    let mut th = ThermalModel::new(
+        &mesh,
+        &ThermalSettings::from_scene(&sc),
+        vec![],
+        Some(air),
+        None,
+    )
+    .unwrap();
     // Fully restrained: any spurious thermal strain would show as stress.
     let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
     let mut t = 0.0;
@@ -139,7 +146,8 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
     };
     sc.concrete.adiabatic = Some(rise.clone());
     let mesh = blocks_mesh(&sc);
-    let mut th = ThermalModel::new(&mesh, &sc, vec![], None, None).unwrap();
+    let mut th =
+        ThermalModel::new(&mesh, &ThermalSettings::from_scene(&sc), vec![], None, None).unwrap();
     let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
     th.pour(1, 1, 0.0, 15.0);
     m.pour(1, 1, 0.0);
