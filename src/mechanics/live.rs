@@ -78,6 +78,13 @@ pub enum LiveError {
 }
 
 impl LiveSystem {
+    /// The system of no live element: what a model holds until its first
+    /// rebuild.
+    pub fn empty(points: &[JointPoint], n_nodes: usize) -> Result<LiveSystem, LiveError> {
+        let no_pair = vec![false; points.len()];
+        LiveSystem::build(&[], &[], &[], points, &no_pair, &[], n_nodes)
+    }
+
     /// Numbers the unknowns of the live elements and pairs and analyses the
     /// pattern. `pair_live[p]` says whether point p is live (both nodes born);
     /// `supported[g]` marks fixed global dofs.

@@ -34,5 +34,7 @@ pub mod contact_step;
 pub mod joints;
 pub mod live;
 pub mod model;
+pub mod settings;
 
 pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};
+pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};

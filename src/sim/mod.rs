@@ -227,7 +227,7 @@ impl<'a> Simulation<'a> {
         let mechanics = if scene.any_mechanical() {
             Some(MechanicsModel::new(
                 mesh,
-                scene,
+                &crate::mechanics::MechanicsSettings::from_scene(scene),
                 &Supports::far_boundary(mesh),
             )?)
         } else {

@@ -252,7 +252,7 @@ pub fn full_dam_mechanics_step_cost(
 ) -> anyhow::Result<FullDamMechCost> {
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
-        scene,
+        &crate::mechanics::MechanicsSettings::from_scene(scene),
         &crate::mechanics::Supports::far_boundary(mesh),
     )?;
     for (block, lift) in all_lifts(mesh) {

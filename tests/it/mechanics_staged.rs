@@ -4,7 +4,7 @@ use crate::common;
 
 use common::*;
 use groutready::material::AdiabaticRise;
-use groutready::mechanics::{MechanicsModel, Supports};
+use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::Mesh;
 use groutready::thermal::boundary::AirTemperature;
 use groutready::thermal::{ThermalModel, ThermalSettings};
@@ -63,7 +63,12 @@ fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
     )
     .unwrap();
     // Fully restrained: any spurious thermal strain would show as stress.
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
+    let mut m = MechanicsModel::new(
+        &mesh,
+        &MechanicsSettings::from_scene(&sc),
+        &rollers(&mesh, true, true, true),
+    )
+    .unwrap();
     let mut t = 0.0;
     for lift in 1..=3 {
         th.pour(1, lift, t, 27.0);
@@ -99,7 +104,12 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
         "",
     );
     let mesh = blocks_mesh(&sc);
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, false)).unwrap();
+    let mut m = MechanicsModel::new(
+        &mesh,
+        &MechanicsSettings::from_scene(&sc),
+        &rollers(&mesh, true, true, false),
+    )
+    .unwrap();
     let mut t = 0.0;
     for lift in 1..=5 {
         m.pour(1, lift, t);
@@ -148,7 +158,12 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
     let mesh = blocks_mesh(&sc);
     let mut th =
         ThermalModel::new(&mesh, &ThermalSettings::from_scene(&sc), vec![], None, None).unwrap();
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
+    let mut m = MechanicsModel::new(
+        &mesh,
+        &MechanicsSettings::from_scene(&sc),
+        &rollers(&mesh, true, true, true),
+    )
+    .unwrap();
     th.pour(1, 1, 0.0, 15.0);
     m.pour(1, 1, 0.0);
     let n = (days / dt).round() as usize;
