@@ -609,9 +609,9 @@ impl MechanicsModel {
             let dg = law.increment(c.age0, c.age1);
             volumetric.iter_mut().for_each(|v| *v += dg);
         }
-        for g in 0..8 {
-            for k in 0..3 {
-                eps[g][k] += volumetric[g];
+        for (eg, v) in eps.iter_mut().zip(volumetric) {
+            for e in &mut eg[..3] {
+                *e += v;
             }
         }
         eps
@@ -716,15 +716,12 @@ impl MechanicsModel {
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
             let nu = Poisson(self.nu[e]);
-            for g in 0..8 {
-                let deps = elasticity::strain(&self.gauss[e][g], &ue);
-                let mut net = [0.0; 6];
-                for k in 0..6 {
-                    net[k] = deps[k] - pseudo[slot][g][k];
-                }
+            for (g, (gauss, imposed)) in self.gauss[e].iter().zip(&pseudo[slot]).enumerate() {
+                let deps = elasticity::strain(gauss, &ue);
+                let net: [f64; 6] = std::array::from_fn(|k| deps[k] - imposed[k]);
                 let ds = nu.q_apply(&net).map(|v| c.e_eff * v);
-                for k in 0..6 {
-                    self.state.stress[e][g][k] += ds[k];
+                for (s, d) in self.state.stress[e][g].iter_mut().zip(ds) {
+                    *s += d;
                 }
                 if !self.state.creep.is_empty() && self.concrete[e] {
                     creep::commit(&mut self.state.creep[8 * e + g], c, nu, &ds);
@@ -734,8 +731,8 @@ impl MechanicsModel {
                 self.state.weight_applied[e] = true;
             }
         }
-        for i in 0..df_ext.len() {
-            self.state.f_ext[i] += df_ext[i];
+        for (f, d) in self.state.f_ext.iter_mut().zip(df_ext) {
+            *f += d;
         }
         self.state.water_load = water;
         self.state.f_contact.iter_mut().for_each(|f| *f = 0.0);
@@ -745,9 +742,9 @@ impl MechanicsModel {
                 continue;
             }
             let global = pt.frame.to_global(st.force);
-            for c in 0..3 {
-                self.state.f_contact[3 * pt.b as usize + c] += global[c];
-                self.state.f_contact[3 * pt.a as usize + c] -= global[c];
+            for (c, g) in global.iter().enumerate() {
+                self.state.f_contact[3 * pt.b as usize + c] += g;
+                self.state.f_contact[3 * pt.a as usize + c] -= g;
             }
         }
     }
@@ -775,7 +772,7 @@ impl MechanicsModel {
             .map_err(|source| MechError::Solve { day, source })?;
         self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
         let residual = crate::fem::relative_residual(&a, &x, &b);
-        if !(residual <= RESIDUAL_TOLERANCE) {
+        if residual.is_nan() || residual > RESIDUAL_TOLERANCE {
             return Err(MechError::Residual { day, residual });
         }
         Ok(x)
@@ -819,7 +816,7 @@ impl MechanicsModel {
         let pair = &mesh.face_pairs[zp.pair as usize];
         let n = crate::mesh::quad_shape(zp.s, zp.t);
         let (mut value, mut label, mut best) = (0.0, "stick", -1.0);
-        for k in 0..4 {
+        for (k, &nk) in n.iter().enumerate() {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
             }
@@ -828,9 +825,9 @@ impl MechanicsModel {
             if !st.paired {
                 return None;
             }
-            value += n[k] * st.aperture();
-            if n[k] > best {
-                best = n[k];
+            value += nk * st.aperture();
+            if nk > best {
+                best = nk;
                 label = st.label();
             }
         }

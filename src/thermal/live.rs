@@ -372,9 +372,9 @@ impl LiveSystem {
                 return Ok(it);
             }
             self.apply(dt, theta, &p, &mut ap, &mut masked, &mut tmp);
-            for i in 0..n {
-                if self.fixed[i] {
-                    ap[i] = 0.0;
+            for (v, &fixed) in ap.iter_mut().zip(&self.fixed) {
+                if fixed {
+                    *v = 0.0;
                 }
             }
             let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
