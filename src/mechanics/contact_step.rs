@@ -18,7 +18,9 @@
 //!   moment of grouting plus its elastic change); tension above the bond
 //!   strength cracks it and it becomes a contact point again.
 //!
-//! Two solvers share this contract ([`ContactSolverKind`]):
+//! Two solvers share this contract ([`ContactSolverKind`]) and one trial:
+//! the states at the start of the step and the states being tried, which
+//! replace the caller's only when the solve succeeds.
 //! - `active_set`: the states are guessed (warm start: the last step's;
 //!   a new pair starts closed), closed points become exact Dirichlet rows of
 //!   their own unknowns, the system is solved, and the states are corrected

@@ -84,13 +84,21 @@ impl Supports {
 /// Counters for the benchmark.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct MechStats {
+    /// steps taken
     pub steps: usize,
+    /// live-set rebuilds (numbering + symbolic factorisation)
     pub symbolic: usize,
+    /// numeric factorisations, the contact solves' included
     pub numeric: usize,
+    /// largest live system [dofs]
     pub max_dofs: usize,
+    /// wall time of the rebuilds [s]
     pub seconds_symbolic: f64,
+    /// wall time of the numeric factorisations [s]
     pub seconds_numeric: f64,
+    /// wall time of the solves without joints [s]
     pub seconds_solve: f64,
+    /// wall time of the assembly [s]
     pub seconds_assembly: f64,
     /// contact solves of the joints
     pub seconds_joints: f64,
@@ -105,6 +113,7 @@ pub struct MechStats {
 pub struct MechState {
     /// displacement accumulated since each node's birth, 3 per node [m]
     pub u: Vec<f64>,
+    /// per element: born (poured, or rock)
     pub live: Vec<bool>,
     /// per element: day it was born (NaN before)
     pub birth_day: Vec<f64>,
@@ -116,6 +125,7 @@ pub struct MechState {
     pub f_ext: Vec<f64>,
     /// water load applied so far, per dof [N]
     pub water_load: Vec<f64>,
+    /// per element: its weight is in `f_ext` (the rock's never strains it)
     pub weight_applied: Vec<bool>,
     /// one per joint contact point (empty without the `joints` effect)
     pub joints: Vec<JointPointState>,
@@ -125,17 +135,9 @@ pub struct MechState {
 
 /// The staged mechanical model.
 pub struct MechanicsModel {
-    /// per element: Gauss points, unit-modulus stiffness, ν, α (zero without
-    /// thermal strain), ρ, and whether it is concrete (else rock)
-    gauss: Vec<[SolidGauss; 8]>,
-    k_unit: Vec<Mat24>,
-    nu: Vec<f64>,
-    alpha: Vec<f64>,
-    density: Vec<f64>,
-    concrete: Vec<bool>,
+    tables: ElementTables,
     settings: MechanicsSettings,
-    /// the rock's modulus (0 without rock elements) [Pa]
-    rock_modulus: f64,
+    /// the law of an element that does not creep (rock, or no `creep` effect)
     no_creep: CreepLaw,
     node_xyz: Vec<[f64; 3]>,
     elements: Vec<[u32; 8]>,
@@ -162,12 +164,19 @@ pub struct MechanicsModel {
 
 /// Per-element constants of the mechanical problem, computed once.
 struct ElementTables {
+    /// Gauss points of each element
     gauss: Vec<[SolidGauss; 8]>,
+    /// stiffness at unit modulus (the modulus ages, ν does not)
     k_unit: Vec<Mat24>,
+    /// Poisson's ratio
     nu: Vec<f64>,
+    /// thermal expansion [1/°C], zero without the `thermal_strain` effect
     alpha: Vec<f64>,
+    /// density [kg/m³]
     density: Vec<f64>,
+    /// concrete (ageing, creeping) or rock (elastic)
     concrete: Vec<bool>,
+    /// the rock's modulus (0 without rock elements) [Pa]
     rock_modulus: f64,
 }
 
@@ -276,14 +285,11 @@ impl MechanicsModel {
         let n_creep = settings.concrete.creep.as_ref().map_or(0, |l| l.n_terms());
         let sys = LiveSystem::empty(&points, mesh.nodes.len())
             .map_err(|source| MechError::Live { day: 0.0, source })?;
+        let state =
+            MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
         Ok(MechanicsModel {
-            gauss: tables.gauss,
-            k_unit: tables.k_unit,
-            nu: tables.nu,
-            alpha: tables.alpha,
-            density: tables.density,
+            tables,
             settings: settings.clone(),
-            rock_modulus: tables.rock_modulus,
             no_creep: CreepLaw { terms: Vec::new() },
             node_xyz: mesh.nodes.clone(),
             elements: mesh.elements.clone(),
@@ -306,14 +312,8 @@ impl MechanicsModel {
                 .map(|(i, p)| (p.a, i as u32))
                 .collect(),
             zone_inner_points: inside_grout_stops(mesh, &points),
-            state: MechState::before_pours(
-                mesh.nodes.len(),
-                &tables.concrete,
-                points.len(),
-                n_creep,
-            ),
+            state,
             stats: MechStats::default(),
-            concrete: tables.concrete,
             points,
         })
     }
@@ -378,7 +378,7 @@ impl MechanicsModel {
         let sys = LiveSystem::build(
             &self.elements,
             &self.state.live,
-            &self.k_unit,
+            &self.tables.k_unit,
             &self.points,
             &pair_live,
             &self.supported,
@@ -440,7 +440,7 @@ impl MechanicsModel {
     fn coefficients(&self, e: usize, t0: f64, t1: f64) -> Result<StepCoefficients, MechError> {
         let birth = self.state.birth_day[e];
         let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
-        let res = if self.concrete[e] {
+        let res = if self.tables.concrete[e] {
             let concrete = &self.settings.concrete;
             creep::coefficients(
                 &concrete.modulus,
@@ -449,7 +449,7 @@ impl MechanicsModel {
                 age1,
             )
         } else {
-            creep::coefficients(&self.rock_modulus, &self.no_creep, age0, age1)
+            creep::coefficients(&self.tables.rock_modulus, &self.no_creep, age0, age1)
         };
         res.map_err(|source| MechError::Age {
             element: e,
@@ -462,7 +462,7 @@ impl MechanicsModel {
     fn gauss_temperatures(&self, e: usize, temps: &[f64]) -> [f64; 8] {
         let conn = &self.elements[e];
         std::array::from_fn(|g| {
-            let n = crate::fem::hex8::shape(self.gauss[e][g].xi);
+            let n = crate::fem::hex8::shape(self.tables.gauss[e][g].xi);
             (0..8)
                 .map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize])
                 .sum()
@@ -560,12 +560,12 @@ impl MechanicsModel {
             let c = self.coefficients(e, t0, t1)?;
             match &el.k_unit {
                 Some(k) => a.add_element_scaled(slot, c.e_eff, k),
-                None => a.add_element_scaled(slot, c.e_eff, &self.k_unit[e]),
+                None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
             }
             let eps = self.imposed_strain(e, &c, temps);
             if eps.iter().any(|g| g.iter().any(|&v| v != 0.0)) {
-                let d = elasticity::isotropic_d(c.e_eff, self.nu[e]);
-                let load = elasticity::initial_strain_load(&self.gauss[e], &d, &eps);
+                let d = elasticity::isotropic_d(c.e_eff, self.tables.nu[e]);
+                let load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
                 sys.add_element_vector(slot, &load, &self.points, &mut b);
             }
             coeffs.push(c);
@@ -588,24 +588,25 @@ impl MechanicsModel {
         temps: Option<(&[f64], &[f64])>,
     ) -> [[f64; 6]; 8] {
         let mut eps = [[0.0; 6]; 8];
-        if !self.state.creep.is_empty() && self.concrete[e] {
+        if !self.state.creep.is_empty() && self.tables.concrete[e] {
             for (g, eg) in eps.iter_mut().enumerate() {
                 *eg = creep::eta(&self.state.creep[8 * e + g], c);
             }
         }
         let mut volumetric = [0.0; 8];
-        if let (true, Some((before, after))) =
-            (self.settings.thermal_strain && self.alpha[e] != 0.0, temps)
-        {
+        if let (true, Some((before, after))) = (
+            self.settings.thermal_strain && self.tables.alpha[e] != 0.0,
+            temps,
+        ) {
             let (t_a, t_b) = (
                 self.gauss_temperatures(e, before),
                 self.gauss_temperatures(e, after),
             );
             for g in 0..8 {
-                volumetric[g] += self.alpha[e] * (t_b[g] - t_a[g]);
+                volumetric[g] += self.tables.alpha[e] * (t_b[g] - t_a[g]);
             }
         }
-        if let (Some(law), true) = (&self.settings.concrete.autogenous, self.concrete[e]) {
+        if let (Some(law), true) = (&self.settings.concrete.autogenous, self.tables.concrete[e]) {
             let dg = law.increment(c.age0, c.age1);
             volumetric.iter_mut().for_each(|v| *v += dg);
         }
@@ -627,8 +628,8 @@ impl MechanicsModel {
                 let e = el.elem as usize;
                 if !self.state.weight_applied[e] {
                     let w = elasticity::body_force_at(
-                        &self.gauss[e],
-                        [0.0, 0.0, -self.density[e] * GRAVITY],
+                        &self.tables.gauss[e],
+                        [0.0, 0.0, -self.tables.density[e] * GRAVITY],
                     );
                     let gd = elasticity::element_dofs(&self.elements[e]);
                     for k in 0..24 {
@@ -715,15 +716,16 @@ impl MechanicsModel {
             let gd = elasticity::element_dofs(&self.elements[e]);
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
-            let nu = Poisson(self.nu[e]);
-            for (g, (gauss, imposed)) in self.gauss[e].iter().zip(&pseudo[slot]).enumerate() {
+            let nu = Poisson(self.tables.nu[e]);
+            for (g, (gauss, imposed)) in self.tables.gauss[e].iter().zip(&pseudo[slot]).enumerate()
+            {
                 let deps = elasticity::strain(gauss, &ue);
                 let net: [f64; 6] = std::array::from_fn(|k| deps[k] - imposed[k]);
                 let ds = nu.q_apply(&net).map(|v| c.e_eff * v);
                 for (s, d) in self.state.stress[e][g].iter_mut().zip(ds) {
                     *s += d;
                 }
-                if !self.state.creep.is_empty() && self.concrete[e] {
+                if !self.state.creep.is_empty() && self.tables.concrete[e] {
                     creep::commit(&mut self.state.creep[8 * e + g], c, nu, &ds);
                 }
             }
@@ -779,8 +781,9 @@ impl MechanicsModel {
     }
 
     /// ‖Σ Bᵀσ − f_ext − f_contact‖ / ‖f_ext + f_contact‖ (or the internal-force
-    /// scale when no load) over the free live dofs: the accumulated stresses
-    /// must balance the accumulated loads and joint forces.
+    /// scale when no load) over the free dofs live in the last step (0
+    /// before the first): the accumulated stresses must balance the
+    /// accumulated loads and joint forces.
     pub fn equilibrium_residual(&self) -> f64 {
         let sys = &self.sys;
         let mut fint = vec![0.0; self.state.u.len()];
@@ -788,7 +791,7 @@ impl MechanicsModel {
         let mut scale = 0.0f64;
         for el in &sys.elements {
             let e = el.elem as usize;
-            let f = elasticity::internal_force(&self.gauss[e], &self.state.stress[e]);
+            let f = elasticity::internal_force(&self.tables.gauss[e], &self.state.stress[e]);
             let gd = elasticity::element_dofs(&self.elements[e]);
             for k in 0..24 {
                 fint[gd[k] as usize] += f[k];
@@ -847,7 +850,7 @@ impl MechanicsModel {
             .min_by(|x, y| x.0.total_cmp(&y.0))
     }
 
-    /// Number of live mechanical dofs.
+    /// Number of mechanical dofs live in the last step (0 before the first).
     pub fn live_dofs(&self) -> usize {
         self.sys.n
     }

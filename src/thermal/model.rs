@@ -51,6 +51,7 @@ pub enum ThermalError {
 /// Counters a benchmark prints; nothing here changes the answer.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ThermalStats {
+    /// steps taken
     pub steps: usize,
     /// live-set rebuilds (new pattern + symbolic factorisation)
     pub symbolic: usize,
@@ -62,10 +63,15 @@ pub struct ThermalStats {
     pub pipe_terms: usize,
     /// conjugate-gradient iterations (PCG solver)
     pub pcg_iterations: usize,
+    /// wall time of the rebuilds [s]
     pub seconds_symbolic: f64,
+    /// wall time of the numeric factorisations [s]
     pub seconds_numeric: f64,
+    /// wall time of the solves (triangular or PCG) [s]
     pub seconds_solve: f64,
+    /// wall time of the boundary reassemblies [s]
     pub seconds_assembly: f64,
+    /// largest live system [dofs]
     pub max_dofs: usize,
 }
 
@@ -74,8 +80,11 @@ pub struct ThermalStats {
 pub struct ThermalState {
     /// per thermal dof; meaningful only where a live element uses the dof
     pub temperature: Vec<f64>,
+    /// per element: born (poured, or rock)
     pub live: Vec<bool>,
+    /// per planned cooling stage
     pub status: Vec<StageStatus>,
+    /// heat gained so far, by source
     pub ledger: HeatLedger,
 }
 
