@@ -18,7 +18,8 @@ pub struct ThermalMaterial {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RockThermal {
     pub material: ThermalMaterial,
-    /// Temperature at the lowest layer of the dam (the top of the rock) [°C].
+    /// Initial temperature at the elevation of the dam's base
+    /// (`Mesh::layer_z[0]`) [°C]; the rock below is warmer by the gradient.
     pub initial_temp_c: f64,
     /// Initial gradient, positive = warmer with depth [°C/m].
     pub gradient_c_per_m: f64,
