@@ -18,8 +18,10 @@
 //!   moment of grouting plus its elastic change); tension above the bond
 //!   strength cracks it and it becomes a contact point again.
 //!
-//! Two solvers share this contract ([`ContactSolverKind`]):
-//! - [`active_set`]: the states are guessed (warm start: the last step's;
+//! Two solvers share this contract ([`ContactSolverKind`]) and one trial:
+//! the states at the start of the step and the states being tried, which
+//! replace the caller's only when the solve succeeds.
+//! - `active_set`: the states are guessed (warm start: the last step's;
 //!   a new pair starts closed), closed points become exact Dirichlet rows of
 //!   their own unknowns, the system is solved, and the states are corrected
 //!   from the gaps and reactions until nothing changes. The symbolic
@@ -31,7 +33,7 @@
 //!   fixed point solved by Anderson mixing (re-solves, no refactorisation).
 //!   A point may switch open ↔ closed or slip → stick [`MAX_FLIPS`] times
 //!   per step, then only close or slip, so the iteration ends.
-//! - [`condensed_qp`]: the Delassus operator W = Eᵀ K̃⁻¹ E of the contact
+//! - `condensed_qp`: the Delassus operator W = Eᵀ K̃⁻¹ E of the contact
 //!   pairs from multi-column solves, handed to the clarabel cone program of
 //!   [`crate::joint::solve`] (maximum dissipation; relative components held
 //!   by supports are left out). Dense in the pairs: for checks and small
@@ -123,10 +125,27 @@ pub fn solve(
     states: &mut [JointPointState],
     settings: &JointSolveSettings,
 ) -> Result<JointStepOutcome, JointStepError> {
-    match settings.method {
-        ContactSolverKind::ActiveSet => active_set(sys, live, states, settings),
-        ContactSolverKind::Qp => condensed_qp(sys, live, states, settings),
-    }
+    let mut trial = Trial {
+        old: states.to_vec(),
+        work: states.to_vec(),
+        out: JointStepOutcome::default(),
+    };
+    let x = match settings.method {
+        ContactSolverKind::ActiveSet => active_set(sys, live, settings, &mut trial)?,
+        ContactSolverKind::Qp => condensed_qp(sys, live, settings, &mut trial)?,
+    };
+    states.copy_from_slice(&trial.work);
+    Ok(JointStepOutcome { x, ..trial.out })
+}
+
+/// The states a joint solve starts from, the states it tries, and its counters.
+struct Trial {
+    /// the states at the start of the step: the forces and gaps of the step
+    /// are changes of these
+    old: Vec<JointPointState>,
+    /// the states being tried, the caller's only once the solve succeeds
+    work: Vec<JointPointState>,
+    out: JointStepOutcome,
 }
 
 /// Largest force of the step: right-hand side and committed contact forces.
@@ -198,59 +217,162 @@ fn crack(
     n
 }
 
-/// The open/stick/slip state iteration (see the module doc).
-pub fn active_set(
+/// Numeric factorisation of `m` on the live system's symbolic analysis, timed.
+fn factorize(
+    live: &mut LiveSystem,
+    m: &SparseSym,
+    out: &mut JointStepOutcome,
+) -> Result<(), JointStepError> {
+    let t = Instant::now();
+    live.solver.factorize(m)?;
+    out.seconds_numeric += t.elapsed().as_secs_f64();
+    out.factorizations += 1;
+    Ok(())
+}
+
+/// Solves with the factor of `m`; a solution that does not satisfy `m`
+/// to [`RESIDUAL_TOLERANCE`] is an error.
+fn solve_checked(
+    live: &LiveSystem,
+    m: &SparseSym,
+    rhs: &[f64],
+    out: &mut JointStepOutcome,
+) -> Result<Vec<f64>, JointStepError> {
+    let mut x = rhs.to_vec();
+    live.solver.solve_in_place(&mut x)?;
+    out.solves += 1;
+    let res = relative_residual(m, &x, rhs);
+    if res.is_nan() || res > RESIDUAL_TOLERANCE {
+        return Err(JointStepError::Residual(res));
+    }
+    Ok(x)
+}
+
+/// The open/stick/slip state iteration (see the module doc); returns the
+/// step's solution.
+fn active_set(
     sys: &StepSystem,
     live: &mut LiveSystem,
-    states: &mut [JointPointState],
     s: &JointSolveSettings,
-) -> Result<JointStepOutcome, JointStepError> {
-    let n = live.n;
-    let old: Vec<JointPointState> = states.to_vec();
-    let mut work = old.clone();
-    // Return mapping: a point that slipped in the last step starts as a stick
-    // trial; the trial force gives this step's slip direction, and it keeps
-    // slipping if that force exceeds the kinetic (not the static) limit.
-    // A direction carried over from the last step would grow sideways from
-    // step to step (measured ×5–100 per step across an incline).
-    let kinetic: Vec<bool> = live
-        .pairs
-        .iter()
-        .map(|p| old[p.point as usize].state == PointState::Slip)
-        .collect();
-    for (q, p) in live.pairs.iter().enumerate() {
-        if kinetic[q] {
-            work[p.point as usize].state = PointState::Stick;
+    trial: &mut Trial,
+) -> Result<Vec<f64>, JointStepError> {
+    let mut it = ActiveSet::start(sys, live, s, trial);
+    let mut last_changes = 0;
+    for pass in 1..=s.max_iterations {
+        trial.out.iterations = pass;
+        let x = it.solve_guess(sys, live, trial)?;
+        let mut outcome = it.correct_states(sys, live, s, trial, &x);
+        outcome.changes += crack(live, sys.points, &mut trial.work, s.bond_strength, sys.day);
+        match it.next_slip_forces(live, trial, outcome) {
+            Some(changes) => last_changes = changes,
+            None => {
+                it.record_kept_closed(sys, live, trial);
+                return Ok(x);
+            }
         }
     }
-    let f_scale = force_scale(sys.b, live, states);
-    let tol_f = s.force_tolerance * f_scale;
-    let tol_g = s.gap_tolerance;
-    let frictionless = s.mu_static == 0.0;
-    // friction force of each slipping point used in the current pass
-    let mut slip_force: Vec<[f64; 2]> = live
-        .pairs
-        .iter()
-        .map(|p| {
-            let st = &old[p.point as usize];
-            let mag = s.mu_kinetic * st.force[2].max(0.0);
-            [mag * st.slip_dir[0], mag * st.slip_dir[1]]
-        })
-        .collect();
-    let mut out = JointStepOutcome::default();
-    let mut factored_key: Option<(Vec<bool>, Vec<bool>)> = None;
-    let mut a_cur = SparseSym::new(sys.a.pattern().clone());
-    let mut m = SparseSym::new(sys.a.pattern().clone());
-    let mut last_changes = 0;
-    let mut anderson = Anderson::new(ANDERSON_DEPTH);
-    let limit: Vec<f64> = kinetic
-        .iter()
-        .map(|&k| if k { s.mu_kinetic } else { s.mu_static })
-        .collect();
-    let mut flips = vec![0usize; live.pairs.len()];
-    for pass in 1..=s.max_iterations {
-        out.iterations = pass;
-        // Constraints and right-hand side of the guessed states.
+    Err(JointStepError::NotConverged {
+        iterations: s.max_iterations,
+        changes: last_changes,
+    })
+}
+
+/// The working data of the active-set iteration of one step.
+struct ActiveSet {
+    /// Coulomb coefficient a stick trial is held to, per live pair: μ_k for
+    /// a point that slipped in the last step, μ_s for one at rest
+    limit: Vec<f64>,
+    /// friction force of each slipping point used in the current pass
+    slip_force: Vec<[f64; 2]>,
+    /// open ↔ closed and slip → stick switches so far, per live pair
+    flips: Vec<usize>,
+    /// force below which a reaction counts as zero [N]
+    tol_f: f64,
+    /// gap below which an open point closes [m]
+    tol_g: f64,
+    frictionless: bool,
+    anderson: Anderson,
+    /// the constrained rows and grout springs of the factor in `live`
+    factored_key: Option<(Vec<bool>, Vec<bool>)>,
+    /// K̃ with the springs of the factored states, before its Dirichlet rows
+    a_cur: SparseSym,
+    /// the factored matrix
+    m: SparseSym,
+}
+
+/// What correcting the states after a pass found.
+struct PassOutcome {
+    /// points that changed state
+    changes: usize,
+    /// the slip forces the pass's reactions call for (the fixed-point map)
+    mapped: Vec<[f64; 2]>,
+    /// slipping points that moved with their friction force: they stick
+    /// once the slip forces have settled
+    reversed: Vec<usize>,
+}
+
+impl ActiveSet {
+    /// The first guess: the last step's states, a point that slipped in the
+    /// last step as a stick trial.
+    fn start(
+        sys: &StepSystem,
+        live: &LiveSystem,
+        s: &JointSolveSettings,
+        trial: &mut Trial,
+    ) -> Self {
+        let old = &trial.old;
+        // Return mapping: a point that slipped in the last step starts as a stick
+        // trial; the trial force gives this step's slip direction, and it keeps
+        // slipping if that force exceeds the kinetic (not the static) limit.
+        // A direction carried over from the last step would grow sideways from
+        // step to step (measured ×5–100 per step across an incline).
+        let kinetic: Vec<bool> = live
+            .pairs
+            .iter()
+            .map(|p| old[p.point as usize].state == PointState::Slip)
+            .collect();
+        for (q, p) in live.pairs.iter().enumerate() {
+            if kinetic[q] {
+                trial.work[p.point as usize].state = PointState::Stick;
+            }
+        }
+        let f_scale = force_scale(sys.b, live, old);
+        let slip_force = live
+            .pairs
+            .iter()
+            .map(|p| {
+                let st = &old[p.point as usize];
+                let mag = s.mu_kinetic * st.force[2].max(0.0);
+                [mag * st.slip_dir[0], mag * st.slip_dir[1]]
+            })
+            .collect();
+        ActiveSet {
+            limit: kinetic
+                .iter()
+                .map(|&k| if k { s.mu_kinetic } else { s.mu_static })
+                .collect(),
+            slip_force,
+            flips: vec![0usize; live.pairs.len()],
+            tol_f: s.force_tolerance * f_scale,
+            tol_g: s.gap_tolerance,
+            frictionless: s.mu_static == 0.0,
+            anderson: Anderson::new(ANDERSON_DEPTH),
+            factored_key: None,
+            a_cur: SparseSym::new(sys.a.pattern().clone()),
+            m: SparseSym::new(sys.a.pattern().clone()),
+        }
+    }
+
+    /// Solves the system of the guessed states: closed points are Dirichlet
+    /// rows of their own unknowns, slip forces and old forces loads;
+    /// refactorises only when the constrained rows or springs change.
+    fn solve_guess(
+        &mut self,
+        sys: &StepSystem,
+        live: &mut LiveSystem,
+        trial: &mut Trial,
+    ) -> Result<Vec<f64>, JointStepError> {
+        let (old, work) = (&trial.old, &trial.work);
         let mut fixed = live.supported.clone();
         let mut presc = sys.prescribed.to_vec();
         let mut rhs = sys.b.to_vec();
@@ -273,47 +395,51 @@ pub fn active_set(
                     fixed[f + 2] = true;
                     presc[f + 2] = -g_old;
                     for k in 0..2 {
-                        rhs[f + k] += slip_force[q][k] - r_old[k];
+                        rhs[f + k] += self.slip_force[q][k] - r_old[k];
                     }
                 }
                 PointState::Grouted => springs[q] = true,
             }
         }
         let key = (fixed.clone(), springs.clone());
-        if factored_key.as_ref() != Some(&key) {
-            a_cur = with_springs(sys.a, live, &work);
-            m = a_cur.clone();
-            m.apply_dirichlet(&fixed);
-            let t = Instant::now();
-            live.solver.factorize(&m)?;
-            out.seconds_numeric += t.elapsed().as_secs_f64();
-            out.factorizations += 1;
-            factored_key = Some(key);
+        if self.factored_key.as_ref() != Some(&key) {
+            self.a_cur = with_springs(sys.a, live, work);
+            self.m = self.a_cur.clone();
+            self.m.apply_dirichlet(&fixed);
+            factorize(live, &self.m, &mut trial.out)?;
+            self.factored_key = Some(key);
         }
-        a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
-        for i in 0..n {
+        self.a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
+        for i in 0..live.n {
             if fixed[i] {
                 rhs[i] = presc[i];
             }
         }
-        let mut x = rhs.clone();
-        live.solver.solve_in_place(&mut x)?;
-        out.solves += 1;
-        let res = relative_residual(&m, &x, &rhs);
-        if !(res <= RESIDUAL_TOLERANCE) {
-            return Err(JointStepError::Residual(res));
-        }
-        // Forces and gaps of the pass.
-        let mut kx = vec![0.0; n];
-        sys.a.mul_vec(&x, &mut kx);
-        let mut changes = 0;
-        // slip forces the pass's reactions call for (the fixed-point map)
-        let mut mapped = slip_force.clone();
-        let mut reversed: Vec<usize> = Vec::new();
+        solve_checked(live, &self.m, &rhs, &mut trial.out)
+    }
+
+    /// Corrects the guessed states from the gaps and reactions of the pass's
+    /// solution `x`.
+    fn correct_states(
+        &mut self,
+        sys: &StepSystem,
+        live: &LiveSystem,
+        s: &JointSolveSettings,
+        trial: &mut Trial,
+        x: &[f64],
+    ) -> PassOutcome {
+        let mut kx = vec![0.0; live.n];
+        sys.a.mul_vec(x, &mut kx);
+        let mut outcome = PassOutcome {
+            changes: 0,
+            mapped: self.slip_force.clone(),
+            reversed: Vec::new(),
+        };
         for (q, pair) in live.pairs.iter().enumerate() {
             let p = pair.point as usize;
             let f = pair.first as usize;
-            let (r_old, g_old) = (old[p].force, start_gap(&old[p], &work[p]));
+            let old = &trial.old[p];
+            let (r_old, g_old) = (old.force, start_gap(old, &trial.work[p]));
             let xd = [x[f], x[f + 1], x[f + 2]];
             // Supported relative components carry support reactions, not contact.
             let reaction: [f64; 3] = std::array::from_fn(|k| {
@@ -323,142 +449,180 @@ pub fn active_set(
                     r_old[k] + kx[f + k] - sys.b[f + k]
                 }
             });
-            let st = &mut work[p];
+            let st = &mut trial.work[p];
             st.gap = g_old + xd[2];
             match st.state {
                 PointState::Open => {
                     st.force = [0.0; 3];
-                    if st.gap < -tol_g {
-                        flips[q] += 1;
-                        st.state = if frictionless {
+                    if st.gap < -self.tol_g {
+                        self.flips[q] += 1;
+                        st.state = if self.frictionless {
                             PointState::Slip
                         } else {
                             PointState::Stick
                         };
-                        changes += 1;
+                        outcome.changes += 1;
                     }
                 }
-                PointState::Stick => {
-                    st.force = reaction;
-                    st.gap = 0.0;
-                    let rt = [reaction[0], reaction[1]];
-                    if reaction[2] < -tol_f && flips[q] < MAX_FLIPS {
-                        flips[q] += 1;
-                        st.state = PointState::Open;
-                        changes += 1;
-                    } else if norm2(rt) > limit[q] * reaction[2].max(0.0) + tol_f {
-                        let mag = norm2(rt);
-                        st.slip_dir = [rt[0] / mag, rt[1] / mag];
-                        st.state = PointState::Slip;
-                        let fs = s.mu_kinetic * reaction[2].max(0.0);
-                        mapped[q] = [fs * st.slip_dir[0], fs * st.slip_dir[1]];
-                        changes += 1;
-                    }
-                }
-                PointState::Slip => {
-                    st.force = [slip_force[q][0], slip_force[q][1], reaction[2]];
-                    st.gap = 0.0;
-                    let slip = [xd[0], xd[1]];
-                    let applied = norm2(slip_force[q]);
-                    let along = if applied > 0.0 {
-                        (slip[0] * slip_force[q][0] + slip[1] * slip_force[q][1]) / applied
-                    } else {
-                        0.0
-                    };
-                    if reaction[2] < -tol_f && flips[q] < MAX_FLIPS {
-                        flips[q] += 1;
-                        st.state = PointState::Open;
-                        changes += 1;
-                    } else {
-                        if !frictionless && along > tol_g && flips[q] < MAX_FLIPS {
-                            // Moving with the friction force: it sticks once
-                            // the slip forces have settled.
-                            reversed.push(q);
-                        }
-                        // The direction is the trial force's for the whole
-                        // step (taken from each pass's slip, the iteration
-                        // cycles between nearby angles on 3-D joints).
-                        let fs = s.mu_kinetic * reaction[2].max(0.0);
-                        mapped[q] = [fs * st.slip_dir[0], fs * st.slip_dir[1]];
-                    }
-                }
+                PointState::Stick => self.check_stick(q, st, reaction, s, &mut outcome),
+                PointState::Slip => self.check_slip(q, st, reaction, xd, s, &mut outcome),
                 PointState::Grouted => {
                     let k = st.grout.map_or([0.0; 3], |g| g.stiffness);
                     st.force = std::array::from_fn(|i| r_old[i] - k[i] * xd[i]);
                 }
             }
         }
-        changes += crack(live, sys.points, &mut work, s.bond_strength, sys.day);
-        last_changes = changes;
+        outcome
+    }
+
+    /// A sticking point opens under tension or slips when its tangential
+    /// reaction exceeds its Coulomb limit.
+    fn check_stick(
+        &mut self,
+        q: usize,
+        st: &mut JointPointState,
+        reaction: [f64; 3],
+        s: &JointSolveSettings,
+        outcome: &mut PassOutcome,
+    ) {
+        st.force = reaction;
+        st.gap = 0.0;
+        let rt = [reaction[0], reaction[1]];
+        if reaction[2] < -self.tol_f && self.flips[q] < MAX_FLIPS {
+            self.flips[q] += 1;
+            st.state = PointState::Open;
+            outcome.changes += 1;
+        } else if norm2(rt) > self.limit[q] * reaction[2].max(0.0) + self.tol_f {
+            let mag = norm2(rt);
+            st.slip_dir = [rt[0] / mag, rt[1] / mag];
+            st.state = PointState::Slip;
+            let fs = s.mu_kinetic * reaction[2].max(0.0);
+            outcome.mapped[q] = [fs * st.slip_dir[0], fs * st.slip_dir[1]];
+            outcome.changes += 1;
+        }
+    }
+
+    /// A slipping point opens under tension; otherwise its slip force is
+    /// mapped from its normal reaction, and one moving with its friction
+    /// force is marked to stick.
+    fn check_slip(
+        &mut self,
+        q: usize,
+        st: &mut JointPointState,
+        reaction: [f64; 3],
+        xd: [f64; 3],
+        s: &JointSolveSettings,
+        outcome: &mut PassOutcome,
+    ) {
+        let slip_force = self.slip_force[q];
+        st.force = [slip_force[0], slip_force[1], reaction[2]];
+        st.gap = 0.0;
+        let slip = [xd[0], xd[1]];
+        let applied = norm2(slip_force);
+        let along = if applied > 0.0 {
+            (slip[0] * slip_force[0] + slip[1] * slip_force[1]) / applied
+        } else {
+            0.0
+        };
+        if reaction[2] < -self.tol_f && self.flips[q] < MAX_FLIPS {
+            self.flips[q] += 1;
+            st.state = PointState::Open;
+            outcome.changes += 1;
+        } else {
+            if !self.frictionless && along > self.tol_g && self.flips[q] < MAX_FLIPS {
+                // Moving with the friction force: it sticks once
+                // the slip forces have settled.
+                outcome.reversed.push(q);
+            }
+            // The direction is the trial force's for the whole
+            // step (taken from each pass's slip, the iteration
+            // cycles between nearby angles on 3-D joints).
+            let fs = s.mu_kinetic * reaction[2].max(0.0);
+            outcome.mapped[q] = [fs * st.slip_dir[0], fs * st.slip_dir[1]];
+        }
+    }
+
+    /// After a pass: restarts the slip-force iteration on new states,
+    /// sticks the reversed points once the slip forces have settled, or
+    /// advances the slip forces by Anderson mixing. Returns the state
+    /// changes to report if the step does not converge, or `None` when it
+    /// has converged.
+    fn next_slip_forces(
+        &mut self,
+        live: &LiveSystem,
+        trial: &mut Trial,
+        outcome: PassOutcome,
+    ) -> Option<usize> {
+        let PassOutcome {
+            changes,
+            mapped,
+            reversed,
+        } = outcome;
         let slipping: Vec<usize> = (0..live.pairs.len())
-            .filter(|&q| work[live.pairs[q].point as usize].state == PointState::Slip)
+            .filter(|&q| trial.work[live.pairs[q].point as usize].state == PointState::Slip)
             .collect();
         if changes > 0 {
             // New states: restart the slip-force iteration from their forces.
-            anderson.clear();
+            self.anderson.clear();
             for &q in &slipping {
-                slip_force[q] = mapped[q];
+                self.slip_force[q] = mapped[q];
             }
+            return Some(changes);
+        }
+        let residual = slipping
+            .iter()
+            .map(|&q| {
+                norm2([
+                    mapped[q][0] - self.slip_force[q][0],
+                    mapped[q][1] - self.slip_force[q][1],
+                ])
+            })
+            .fold(0.0, f64::max);
+        if residual <= self.tol_f && reversed.is_empty() {
+            None
+        } else if residual <= self.tol_f {
+            for &q in &reversed {
+                trial.work[live.pairs[q].point as usize].state = PointState::Stick;
+                self.flips[q] += 1;
+            }
+            self.anderson.clear();
+            Some(reversed.len())
         } else {
-            let residual = slipping
-                .iter()
-                .map(|&q| {
-                    norm2([
-                        mapped[q][0] - slip_force[q][0],
-                        mapped[q][1] - slip_force[q][1],
-                    ])
-                })
-                .fold(0.0, f64::max);
-            if residual <= tol_f && reversed.is_empty() {
-                for (q, pair) in live.pairs.iter().enumerate() {
-                    let st = &work[pair.point as usize];
-                    if flips[q] >= MAX_FLIPS && st.state.is_closed() {
-                        let t = -st.force[2] / sys.points[pair.point as usize].area;
-                        out.kept_closed_tension = out.kept_closed_tension.max(t);
-                    }
-                }
-                out.x = x;
-                states.copy_from_slice(&work);
-                return Ok(out);
-            } else if residual <= tol_f {
-                for &q in &reversed {
-                    work[live.pairs[q].point as usize].state = PointState::Stick;
-                    flips[q] += 1;
-                }
-                last_changes = reversed.len();
-                anderson.clear();
-            } else {
-                // The slip forces are a fixed point of (forces → solve →
-                // μ_k·r_n), affine for fixed directions. Anderson mixing
-                // converges in a few passes where the plain iteration
-                // contracts slowly (0.94 per pass measured on the small dam).
-                let xs: Vec<f64> = slipping.iter().flat_map(|&q| slip_force[q]).collect();
-                let fx: Vec<f64> = slipping.iter().flat_map(|&q| mapped[q]).collect();
-                let next = anderson.next(&xs, &fx);
-                for (i, &q) in slipping.iter().enumerate() {
-                    slip_force[q] = [next[2 * i], next[2 * i + 1]];
-                }
+            // The slip forces are a fixed point of (forces → solve →
+            // μ_k·r_n), affine for fixed directions. Anderson mixing
+            // converges in a few passes where the plain iteration
+            // contracts slowly (0.94 per pass measured on the small dam).
+            let xs: Vec<f64> = slipping.iter().flat_map(|&q| self.slip_force[q]).collect();
+            let fx: Vec<f64> = slipping.iter().flat_map(|&q| mapped[q]).collect();
+            let next = self.anderson.next(&xs, &fx);
+            for (i, &q) in slipping.iter().enumerate() {
+                self.slip_force[q] = [next[2 * i], next[2 * i + 1]];
+            }
+            Some(changes)
+        }
+    }
+
+    /// The largest tension left on a point the flip limit kept closed.
+    fn record_kept_closed(&self, sys: &StepSystem, live: &LiveSystem, trial: &mut Trial) {
+        for (q, pair) in live.pairs.iter().enumerate() {
+            let st = &trial.work[pair.point as usize];
+            if self.flips[q] >= MAX_FLIPS && st.state.is_closed() {
+                let t = -st.force[2] / sys.points[pair.point as usize].area;
+                trial.out.kept_closed_tension = trial.out.kept_closed_tension.max(t);
             }
         }
     }
-    Err(JointStepError::NotConverged {
-        iterations: s.max_iterations,
-        changes: last_changes,
-    })
 }
 
-/// The condensed cone program (see the module doc). Cracked grout layers
-/// restart the solve with those points as contacts.
-pub fn condensed_qp(
+/// The condensed cone program (see the module doc); returns the step's
+/// solution. Cracked grout layers restart the solve with those points as
+/// contacts.
+fn condensed_qp(
     sys: &StepSystem,
     live: &mut LiveSystem,
-    states: &mut [JointPointState],
     s: &JointSolveSettings,
-) -> Result<JointStepOutcome, JointStepError> {
-    let n = live.n;
-    let old: Vec<JointPointState> = states.to_vec();
-    let mut work = old.clone();
-    let mut out = JointStepOutcome::default();
+    trial: &mut Trial,
+) -> Result<Vec<f64>, JointStepError> {
     let friction = if s.mu_static == 0.0 {
         FrictionModel::Frictionless
     } else {
@@ -468,121 +632,141 @@ pub fn condensed_qp(
         }
     };
     for _round in 0..s.max_iterations {
-        let mut m = with_springs(sys.a, live, &work);
+        let mut m = with_springs(sys.a, live, &trial.work);
         let mut rhs = sys.b.to_vec();
         m.dirichlet_correction(&live.supported, sys.prescribed, &mut rhs);
         m.apply_dirichlet(&live.supported);
-        let t = Instant::now();
-        live.solver.factorize(&m)?;
-        out.seconds_numeric += t.elapsed().as_secs_f64();
-        out.factorizations += 1;
+        factorize(live, &m, &mut trial.out)?;
         let contact: Vec<usize> = (0..live.pairs.len())
-            .filter(|&q| work[live.pairs[q].point as usize].state != PointState::Grouted)
+            .filter(|&q| trial.work[live.pairs[q].point as usize].state != PointState::Grouted)
             .collect();
         for &q in &contact {
             let pair = &live.pairs[q];
             for k in 0..3 {
-                rhs[pair.first as usize + k] -= old[pair.point as usize].force[k];
+                rhs[pair.first as usize + k] -= trial.old[pair.point as usize].force[k];
             }
         }
-        for i in 0..n {
-            if live.supported[i] {
-                rhs[i] = sys.prescribed[i];
+        for ((r, &held), &value) in rhs.iter_mut().zip(&live.supported).zip(sys.prescribed) {
+            if held {
+                *r = value;
             }
         }
-        let mut x = rhs.clone();
-        live.solver.solve_in_place(&mut x)?;
-        out.solves += 1;
-        let res = relative_residual(&m, &x, &rhs);
-        if !(res <= RESIDUAL_TOLERANCE) {
-            return Err(JointStepError::Residual(res));
-        }
+        let mut x = solve_checked(live, &m, &rhs, &mut trial.out)?;
         if !contact.is_empty() {
-            let cols = 3 * contact.len();
-            let mut g = faer::Mat::<f64>::zeros(n, cols);
-            for (j, &q) in contact.iter().enumerate() {
-                for k in 0..3 {
-                    g[(live.pairs[q].first as usize + k, 3 * j + k)] = 1.0;
-                }
-            }
-            live.solver.solve_columns(&mut g)?;
-            out.solves += cols;
-            let row = |i: usize| live.pairs[contact[i / 3]].first as usize + i % 3;
-            let mut w = nalgebra::DMatrix::from_fn(cols, cols, |i, j| {
-                0.5 * (g[(row(i), j)] + g[(row(j), i)])
-            });
-            // A relative component held by a support is not a contact
-            // unknown: decouple it with a compliance of the problem's scale
-            // (its identity row of the constrained matrix would otherwise read
-            // 1 m/N against ~1e-10) and pin its force to zero below.
-            let held: Vec<bool> = (0..cols).map(|i| live.supported[row(i)]).collect();
-            let free_diag: Vec<f64> = (0..cols).filter(|&i| !held[i]).map(|i| w[(i, i)]).collect();
-            let scale = free_diag.iter().sum::<f64>() / free_diag.len().max(1) as f64;
-            for i in (0..cols).filter(|&i| held[i]) {
-                for j in 0..cols {
-                    w[(i, j)] = 0.0;
-                    w[(j, i)] = 0.0;
-                }
-                w[(i, i)] = if scale > 0.0 { scale } else { 1.0 };
-            }
-            let mut b = vec![0.0; cols];
-            let mut r_old = vec![0.0; cols];
-            for (j, &q) in contact.iter().enumerate() {
-                let p = live.pairs[q].point as usize;
-                for k in 0..3 {
-                    b[3 * j + k] = x[row(3 * j + k)];
-                    r_old[3 * j + k] = old[p].force[k];
-                }
-                b[3 * j + 2] += start_gap(&old[p], &work[p]);
-            }
-            for i in (0..cols).filter(|&i| held[i]) {
-                b[i] = 0.0;
-            }
-            let fr = vec![friction; contact.len()];
-            let problem = ContactProblem::new(&w, &b, &fr);
-            let mut sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))?;
-            out.iterations += sol.fixed_point_iterations;
-            for i in (0..cols).filter(|&i| held[i]) {
-                sol.r[i] = 0.0;
-            }
-            for i in 0..n {
-                let mut acc = 0.0;
-                for k in 0..cols {
-                    acc += g[(i, k)] * sol.r[k];
-                }
-                x[i] += acc;
-            }
-            for (j, &q) in contact.iter().enumerate() {
-                let p = live.pairs[q].point as usize;
-                let st = &mut work[p];
-                st.force = [sol.r[3 * j], sol.r[3 * j + 1], sol.r[3 * j + 2]];
-                st.gap = sol.u[3 * j + 2];
-                st.state = sol.states[j].into();
-                let t = [st.force[0], st.force[1]];
-                if st.state == PointState::Slip && norm2(t) > 0.0 {
-                    st.slip_dir = [t[0] / norm2(t), t[1] / norm2(t)];
-                }
-            }
+            solve_contacts(live, trial, &contact, friction, &mut x)?;
         }
         for pair in &live.pairs {
             let p = pair.point as usize;
-            if work[p].state == PointState::Grouted {
+            let work = &mut trial.work[p];
+            if work.state == PointState::Grouted {
                 let f = pair.first as usize;
-                let k = work[p].grout.map_or([0.0; 3], |g| g.stiffness);
-                work[p].force = std::array::from_fn(|i| old[p].force[i] - k[i] * x[f + i]);
-                work[p].gap = old[p].gap + x[f + 2];
+                let k = work.grout.map_or([0.0; 3], |g| g.stiffness);
+                let old = &trial.old[p];
+                work.force = std::array::from_fn(|i| old.force[i] - k[i] * x[f + i]);
+                work.gap = old.gap + x[f + 2];
             }
         }
-        if crack(live, sys.points, &mut work, s.bond_strength, sys.day) == 0 {
-            out.x = x;
-            states.copy_from_slice(&work);
-            return Ok(out);
+        if crack(live, sys.points, &mut trial.work, s.bond_strength, sys.day) == 0 {
+            return Ok(x);
         }
     }
     Err(JointStepError::NotConverged {
         iterations: s.max_iterations,
         changes: 0,
     })
+}
+
+/// Reduced row of component `i` (3 per point) of the contact points.
+fn contact_row(live: &LiveSystem, contact: &[usize], i: usize) -> usize {
+    live.pairs[contact[i / 3]].first as usize + i % 3
+}
+
+/// The contact forces of the points `contact` (live pair slots) from the
+/// cone program on W = Eᵀ K̃⁻¹ E, given `x`, the solution without them;
+/// adds their displacements to `x` and sets the points' states.
+fn solve_contacts(
+    live: &LiveSystem,
+    trial: &mut Trial,
+    contact: &[usize],
+    friction: FrictionModel,
+    x: &mut [f64],
+) -> Result<(), JointStepError> {
+    let cols = 3 * contact.len();
+    let mut g = faer::Mat::<f64>::zeros(live.n, cols);
+    for (j, &q) in contact.iter().enumerate() {
+        for k in 0..3 {
+            g[(live.pairs[q].first as usize + k, 3 * j + k)] = 1.0;
+        }
+    }
+    live.solver.solve_columns(&mut g)?;
+    trial.out.solves += cols;
+    let (w, held) = delassus(live, contact, &g);
+    let mut b = vec![0.0; cols];
+    let mut r_old = vec![0.0; cols];
+    for (j, &q) in contact.iter().enumerate() {
+        let p = live.pairs[q].point as usize;
+        for k in 0..3 {
+            b[3 * j + k] = x[contact_row(live, contact, 3 * j + k)];
+            r_old[3 * j + k] = trial.old[p].force[k];
+        }
+        b[3 * j + 2] += start_gap(&trial.old[p], &trial.work[p]);
+    }
+    for i in (0..cols).filter(|&i| held[i]) {
+        b[i] = 0.0;
+    }
+    let fr = vec![friction; contact.len()];
+    let problem = ContactProblem::new(&w, &b, &fr);
+    let mut sol = crate::joint::solve(&problem, &ContactSettings::default(), Some(&r_old))?;
+    trial.out.iterations += sol.fixed_point_iterations;
+    for i in (0..cols).filter(|&i| held[i]) {
+        sol.r[i] = 0.0;
+    }
+    for (i, xi) in x.iter_mut().enumerate() {
+        let mut acc = 0.0;
+        for k in 0..cols {
+            acc += g[(i, k)] * sol.r[k];
+        }
+        *xi += acc;
+    }
+    for (j, &q) in contact.iter().enumerate() {
+        let st = &mut trial.work[live.pairs[q].point as usize];
+        st.force = [sol.r[3 * j], sol.r[3 * j + 1], sol.r[3 * j + 2]];
+        st.gap = sol.u[3 * j + 2];
+        st.state = sol.states[j].into();
+        let t = [st.force[0], st.force[1]];
+        if st.state == PointState::Slip && norm2(t) > 0.0 {
+            st.slip_dir = [t[0] / norm2(t), t[1] / norm2(t)];
+        }
+    }
+    Ok(())
+}
+
+/// The Delassus operator W of the contact points from the solved unit
+/// columns `g` (symmetrised), and which of its components a support holds.
+fn delassus(
+    live: &LiveSystem,
+    contact: &[usize],
+    g: &faer::Mat<f64>,
+) -> (nalgebra::DMatrix<f64>, Vec<bool>) {
+    let cols = 3 * contact.len();
+    let row = |i: usize| contact_row(live, contact, i);
+    let mut w =
+        nalgebra::DMatrix::from_fn(cols, cols, |i, j| 0.5 * (g[(row(i), j)] + g[(row(j), i)]));
+    // A relative component held by a support is not a contact
+    // unknown: decouple it with a compliance of the problem's scale
+    // (its identity row of the constrained matrix would otherwise read
+    // 1 m/N against ~1e-10) and pin its force to zero (the caller).
+    let held: Vec<bool> = (0..cols).map(|i| live.supported[row(i)]).collect();
+    let free_diag: Vec<f64> = (0..cols).filter(|&i| !held[i]).map(|i| w[(i, i)]).collect();
+    let scale = free_diag.iter().sum::<f64>() / free_diag.len().max(1) as f64;
+    for i in (0..cols).filter(|&i| held[i]) {
+        for j in 0..cols {
+            w[(i, j)] = 0.0;
+            w[(j, i)] = 0.0;
+        }
+        w[(i, i)] = if scale > 0.0 { scale } else { 1.0 };
+    }
+    (w, held)
 }
 
 /// Anderson mixing (type II) for a fixed point x = F(x): the next iterate
@@ -651,8 +835,8 @@ impl Anderson {
         };
         let mut next = fx.to_vec();
         for j in 0..m {
-            for i in 0..n {
-                next[i] -= gamma[j] * (self.fs[j + 1][i] - self.fs[j][i]);
+            for ((v, a), b) in next.iter_mut().zip(&self.fs[j + 1]).zip(&self.fs[j]) {
+                *v -= gamma[j] * (a - b);
             }
         }
         next

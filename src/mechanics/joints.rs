@@ -120,8 +120,15 @@ impl From<ContactState> for PointState {
 /// The contact points of every joint of the mesh.
 pub fn build_points(mesh: &Mesh) -> Result<Vec<JointPoint>, ContactError> {
     use std::collections::BTreeMap;
-    // (a, b) → (joint, zone, Σ area-weighted normal, area)
-    let mut acc: BTreeMap<(u32, u32), (u32, u32, [f64; 3], f64)> = BTreeMap::new();
+    /// What the quads around one node pair contribute to its point.
+    struct Sum {
+        joint: u32,
+        zone: u32,
+        /// Σ area-weighted unit normal
+        normal: [f64; 3],
+        area: f64,
+    }
+    let mut acc: BTreeMap<(u32, u32), Sum> = BTreeMap::new();
     for pair in &mesh.face_pairs {
         let quad: [[f64; 3]; 4] = std::array::from_fn(|k| mesh.nodes[pair.nodes_a[k] as usize]);
         let area = quad4::area(&quad);
@@ -134,24 +141,27 @@ pub fn build_points(mesh: &Mesh) -> Result<Vec<JointPoint>, ContactError> {
             if a == b {
                 continue;
             }
-            let e = acc
-                .entry((a, b))
-                .or_insert((pair.joint, pair.zone, [0.0; 3], 0.0));
-            for d in 0..3 {
-                e.2[d] += 0.25 * area * n[d] / norm;
+            let e = acc.entry((a, b)).or_insert(Sum {
+                joint: pair.joint,
+                zone: pair.zone,
+                normal: [0.0; 3],
+                area: 0.0,
+            });
+            for (s, nd) in e.normal.iter_mut().zip(n) {
+                *s += 0.25 * area * nd / norm;
             }
-            e.3 += 0.25 * area;
+            e.area += 0.25 * area;
         }
     }
     acc.into_iter()
-        .map(|((a, b), (joint, zone, n, area))| {
+        .map(|((a, b), sum)| {
             Ok(JointPoint {
-                joint,
-                zone,
+                joint: sum.joint,
+                zone: sum.zone,
                 a,
                 b,
-                frame: LocalFrame::from_normal(n)?,
-                area,
+                frame: LocalFrame::from_normal(sum.normal)?,
+                area: sum.area,
             })
         })
         .collect()

@@ -78,6 +78,13 @@ pub enum LiveError {
 }
 
 impl LiveSystem {
+    /// The system of no live element: what a model holds until its first
+    /// rebuild.
+    pub fn empty(points: &[JointPoint], n_nodes: usize) -> Result<LiveSystem, LiveError> {
+        let no_pair = vec![false; points.len()];
+        LiveSystem::build(&[], &[], &[], points, &no_pair, &[], n_nodes)
+    }
+
     /// Numbers the unknowns of the live elements and pairs and analyses the
     /// pattern. `pair_live[p]` says whether point p is live (both nodes born);
     /// `supported[g]` marks fixed global dofs.
@@ -90,69 +97,22 @@ impl LiveSystem {
         supported: &[bool],
         n_nodes: usize,
     ) -> Result<LiveSystem, LiveError> {
-        let mut pair_of_b = vec![NONE; n_nodes];
-        let mut slot_of_point = vec![NONE; points.len()];
-        let mut is_a = vec![false; n_nodes];
-        let mut pairs = Vec::new();
-        for (p, pt) in points.iter().enumerate() {
-            if !pair_live[p] {
-                continue;
-            }
-            pair_of_b[pt.b as usize] = pairs.len() as u32;
-            slot_of_point[p] = pairs.len() as u32;
-            is_a[pt.a as usize] = true;
-            pairs.push(LivePair {
-                point: p as u32,
-                first: NONE,
-            });
-        }
-        if let Some(node) = (0..n_nodes).find(|&k| is_a[k] && pair_of_b[k] != NONE) {
-            return Err(LiveError::ChainedPair { node: node as u32 });
-        }
-        let mut index_of = vec![NONE; 3 * n_nodes];
-        let mut node_dofs = Vec::new();
-        let mut n = 0u32;
-        let number =
-            |g: usize, n: &mut u32, index_of: &mut Vec<u32>, node_dofs: &mut Vec<(u32, u32)>| {
-                if index_of[g] == NONE {
-                    index_of[g] = *n;
-                    node_dofs.push((g as u32, *n));
-                    *n += 1;
-                }
-                index_of[g]
-            };
+        let LivePairs {
+            mut pairs,
+            pair_of_b,
+            slot_of_point,
+        } = LivePairs::new(points, pair_live, n_nodes)?;
+        let mut numbering = Numbering {
+            index_of: vec![NONE; 3 * n_nodes],
+            node_dofs: Vec::new(),
+            n: 0,
+        };
         let mut live_elements = Vec::new();
         for (e, conn) in elements.iter().enumerate() {
             if !live[e] {
                 continue;
             }
-            let mut dofs = Vec::with_capacity(24);
-            let mut b_nodes = Vec::new();
-            for (k, &node) in conn.iter().enumerate() {
-                let slot = pair_of_b[node as usize];
-                if slot == NONE {
-                    for c in 0..3 {
-                        dofs.push(number(
-                            3 * node as usize + c,
-                            &mut n,
-                            &mut index_of,
-                            &mut node_dofs,
-                        ));
-                    }
-                } else {
-                    let a = points[pairs[slot as usize].point as usize].a as usize;
-                    for c in 0..3 {
-                        dofs.push(number(3 * a + c, &mut n, &mut index_of, &mut node_dofs));
-                    }
-                    let pair = &mut pairs[slot as usize];
-                    if pair.first == NONE {
-                        pair.first = n;
-                        n += 3;
-                    }
-                    dofs.extend(pair.first..pair.first + 3);
-                    b_nodes.push((k as u8, slot));
-                }
-            }
+            let (dofs, b_nodes) = numbering.element(conn, &pair_of_b, &mut pairs, points);
             let k_unit = (!b_nodes.is_empty()).then(|| {
                 let t = transform(&b_nodes, &pairs, points);
                 t.transpose() * DMatrix::from_column_slice(24, 24, k_unit[e].as_slice()) * &t
@@ -166,6 +126,11 @@ impl LiveSystem {
         }
         // A pair whose a node belongs to no live element (cannot happen for
         // live pairs, whose nodes are born with their elements) keeps NONE.
+        let Numbering {
+            index_of,
+            node_dofs,
+            n,
+        } = numbering;
         let n = n as usize;
         let lists: Vec<&[u32]> = live_elements.iter().map(|e| e.dofs.as_slice()).collect();
         let pattern = Arc::new(Pattern::new(n, &lists));
@@ -178,27 +143,7 @@ impl LiveSystem {
             faer::Par::rayon(0)
         };
         let solver = CholeskySolver::with_options(pattern.clone(), &Ordering::Amd, par)?;
-        let mut supported_r = vec![false; n];
-        for &(g, i) in &node_dofs {
-            supported_r[i as usize] = supported[g as usize];
-        }
-        // A support of node b in a direction its node a shares and that is
-        // one of the pair's local axes (a joint reaching a symmetry plane or
-        // a frictionless base) fixes that relative component.
-        for pair in &pairs {
-            let pt = &points[pair.point as usize];
-            let axes = [pt.frame.t1, pt.frame.t2, pt.frame.n];
-            for c in 0..3 {
-                if !supported[3 * pt.b as usize + c] {
-                    continue;
-                }
-                let j = (0..3).find(|&j| (axes[j][c].abs() - 1.0).abs() < 1e-12);
-                match (supported[3 * pt.a as usize + c], j) {
-                    (true, Some(j)) => supported_r[pair.first as usize + j] = true,
-                    _ => return Err(LiveError::SupportedPairNode { node: pt.b }),
-                }
-            }
-        }
+        let supported_r = reduced_supports(n, &node_dofs, &pairs, points, supported)?;
         Ok(LiveSystem {
             n,
             index_of,
@@ -276,6 +221,137 @@ impl LiveSystem {
             }
         }
     }
+}
+
+/// The live pairs and the maps to them.
+struct LivePairs {
+    pairs: Vec<LivePair>,
+    /// pair slot of each node on the b side of a live pair (NONE otherwise)
+    pair_of_b: Vec<u32>,
+    /// pair slot of each joint point (NONE when not live)
+    slot_of_point: Vec<u32>,
+}
+
+impl LivePairs {
+    /// The live pairs in point order, their dofs not numbered yet; a node on
+    /// side a of one pair and side b of another is an error.
+    fn new(points: &[JointPoint], pair_live: &[bool], n_nodes: usize) -> Result<Self, LiveError> {
+        let mut pair_of_b = vec![NONE; n_nodes];
+        let mut slot_of_point = vec![NONE; points.len()];
+        let mut is_a = vec![false; n_nodes];
+        let mut pairs = Vec::new();
+        for (p, pt) in points.iter().enumerate() {
+            if !pair_live[p] {
+                continue;
+            }
+            pair_of_b[pt.b as usize] = pairs.len() as u32;
+            slot_of_point[p] = pairs.len() as u32;
+            is_a[pt.a as usize] = true;
+            pairs.push(LivePair {
+                point: p as u32,
+                first: NONE,
+            });
+        }
+        if let Some(node) = (0..n_nodes).find(|&k| is_a[k] && pair_of_b[k] != NONE) {
+            return Err(LiveError::ChainedPair { node: node as u32 });
+        }
+        Ok(LivePairs {
+            pairs,
+            pair_of_b,
+            slot_of_point,
+        })
+    }
+}
+
+/// The reduced dofs numbered so far, in the order the live elements first
+/// use them.
+struct Numbering {
+    /// reduced dof of each global node dof (NONE until numbered)
+    index_of: Vec<u32>,
+    /// (global dof, reduced dof) of every numbered node dof
+    node_dofs: Vec<(u32, u32)>,
+    /// dofs numbered so far
+    n: u32,
+}
+
+impl Numbering {
+    /// The reduced dof of global node dof `g`, numbered now if new.
+    fn node_dof(&mut self, g: usize) -> u32 {
+        if self.index_of[g] == NONE {
+            self.index_of[g] = self.n;
+            self.node_dofs.push((g as u32, self.n));
+            self.n += 1;
+        }
+        self.index_of[g]
+    }
+
+    /// Numbers the unknowns of one live element: three per ordinary node;
+    /// for a node on side b of a live pair, node a's three and the pair's
+    /// relative three. Returns the element's reduced dofs and its b nodes.
+    fn element(
+        &mut self,
+        conn: &[u32; 8],
+        pair_of_b: &[u32],
+        pairs: &mut [LivePair],
+        points: &[JointPoint],
+    ) -> (Vec<u32>, Vec<(u8, u32)>) {
+        let mut dofs = Vec::with_capacity(24);
+        let mut b_nodes = Vec::new();
+        for (k, &node) in conn.iter().enumerate() {
+            let slot = pair_of_b[node as usize];
+            if slot == NONE {
+                for c in 0..3 {
+                    dofs.push(self.node_dof(3 * node as usize + c));
+                }
+            } else {
+                let a = points[pairs[slot as usize].point as usize].a as usize;
+                for c in 0..3 {
+                    dofs.push(self.node_dof(3 * a + c));
+                }
+                let pair = &mut pairs[slot as usize];
+                if pair.first == NONE {
+                    pair.first = self.n;
+                    self.n += 3;
+                }
+                dofs.extend(pair.first..pair.first + 3);
+                b_nodes.push((k as u8, slot));
+            }
+        }
+        (dofs, b_nodes)
+    }
+}
+
+/// Supported reduced dofs: those of supported node dofs, and the relative
+/// components the supports of a pair's two nodes fix.
+fn reduced_supports(
+    n: usize,
+    node_dofs: &[(u32, u32)],
+    pairs: &[LivePair],
+    points: &[JointPoint],
+    supported: &[bool],
+) -> Result<Vec<bool>, LiveError> {
+    let mut supported_r = vec![false; n];
+    for &(g, i) in node_dofs {
+        supported_r[i as usize] = supported[g as usize];
+    }
+    // A support of node b in a direction its node a shares and that is
+    // one of the pair's local axes (a joint reaching a symmetry plane or
+    // a frictionless base) fixes that relative component.
+    for pair in pairs {
+        let pt = &points[pair.point as usize];
+        let axes = [pt.frame.t1, pt.frame.t2, pt.frame.n];
+        for c in 0..3 {
+            if !supported[3 * pt.b as usize + c] {
+                continue;
+            }
+            let j = (0..3).find(|&j| (axes[j][c].abs() - 1.0).abs() < 1e-12);
+            match (supported[3 * pt.a as usize + c], j) {
+                (true, Some(j)) => supported_r[pair.first as usize + j] = true,
+                _ => return Err(LiveError::SupportedPairNode { node: pt.b }),
+            }
+        }
+    }
+    Ok(supported_r)
 }
 
 /// T of one element: 24 rows (global node dofs), one column per element

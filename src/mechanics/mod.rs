@@ -24,6 +24,9 @@
 //! before the zone is grouted, a bonded grout layer after, a contact again
 //! once the layer cracks.
 //!
+//! The model reads no scene: [`MechanicsSettings::from_scene`] resolves what
+//! it needs (laws, constants, effects, joint parameters) once.
+//!
 //! Verified by `tests/it/mechanics_staged.rs` (stress-free birth, restrained
 //! thermal stress in the staged driver, relaxation, equilibrium of the
 //! accumulated stresses with the accumulated loads) on top of the element
@@ -34,5 +37,7 @@ pub mod contact_step;
 pub mod joints;
 pub mod live;
 pub mod model;
+pub mod settings;
 
 pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};
+pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};

@@ -1,5 +1,6 @@
 //! The mechanical model of the live elements and its incremental step.
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -8,15 +9,14 @@ use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8::FACES;
 use crate::fem::{ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
-use crate::material::{AgeStepError, AutogenousLaw, CreepLaw, ModulusLaw, Poisson};
+use crate::material::{AgeStepError, CreepLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
-use crate::scene::{Effect, Scene};
 use crate::vocab::JointState;
-use std::collections::HashMap;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::live::{LiveError, LiveSystem};
+use super::live::{LiveError, LiveSystem, NONE};
+use super::settings::{JointMechanics, MechanicsSettings};
 
 /// Gravity [m/s²].
 pub const GRAVITY: f64 = 9.81;
@@ -42,8 +42,8 @@ pub enum MechError {
         day: f64,
         source: AgeStepError,
     },
-    #[error("the scene has mechanical effects but no {0}")]
-    Missing(&'static str),
+    #[error("the mesh has rock elements but the mechanical settings have no rock (the scene's [rock] table)")]
+    NoRock,
     #[error("joint contact on day {day:.3}: {source}")]
     Contact {
         day: f64,
@@ -85,13 +85,21 @@ impl Supports {
 /// Counters for the benchmark.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct MechStats {
+    /// steps taken
     pub steps: usize,
+    /// live-set rebuilds (numbering + symbolic factorisation)
     pub symbolic: usize,
+    /// numeric factorisations, the contact solves' included
     pub numeric: usize,
+    /// largest live system [dofs]
     pub max_dofs: usize,
+    /// wall time of the rebuilds [s]
     pub seconds_symbolic: f64,
+    /// wall time of the numeric factorisations [s]
     pub seconds_numeric: f64,
+    /// wall time of the solves without joints [s]
     pub seconds_solve: f64,
+    /// wall time of the assembly [s]
     pub seconds_assembly: f64,
     /// contact solves of the joints
     pub seconds_joints: f64,
@@ -106,6 +114,7 @@ pub struct MechStats {
 pub struct MechState {
     /// displacement accumulated since each node's birth, 3 per node [m]
     pub u: Vec<f64>,
+    /// per element: born (poured, or rock)
     pub live: Vec<bool>,
     /// per element: day it was born (NaN before)
     pub birth_day: Vec<f64>,
@@ -117,6 +126,7 @@ pub struct MechState {
     pub f_ext: Vec<f64>,
     /// water load applied so far, per dof [N]
     pub water_load: Vec<f64>,
+    /// per element: its weight is in `f_ext` (the rock's never strains it)
     pub weight_applied: Vec<bool>,
     /// one per joint contact point (empty without the `joints` effect)
     pub joints: Vec<JointPointState>,
@@ -126,167 +136,166 @@ pub struct MechState {
 
 /// The staged mechanical model.
 pub struct MechanicsModel {
-    gauss: Vec<[SolidGauss; 8]>,
-    k_unit: Vec<Mat24>,
-    nu: Vec<f64>,
-    alpha: Vec<f64>,
-    density: Vec<f64>,
-    concrete: Vec<bool>,
-    modulus: ModulusLaw,
-    rock_modulus: f64,
-    creep_law: Option<CreepLaw>,
+    tables: ElementTables,
+    settings: MechanicsSettings,
+    /// the law of an element that does not creep (rock, or no `creep` effect)
     no_creep: CreepLaw,
-    autogenous: Option<AutogenousLaw>,
-    thermal_strain: bool,
-    self_weight: bool,
-    reservoir_load: bool,
     node_xyz: Vec<[f64; 3]>,
     elements: Vec<[u32; 8]>,
     thermal_dof: Vec<u32>,
-    lift_elems: std::collections::HashMap<(u32, u32), Vec<u32>>,
+    lift_elems: HashMap<(u32, u32), Vec<u32>>,
     supported: Vec<bool>,
     /// displacement increments of supported dofs for the next step (global dof, value)
     prescribed: Vec<(u32, f64)>,
     wet_faces: Vec<(u32, u8)>,
-    sys: Option<LiveSystem>,
+    /// the system of the live set at the last rebuild (empty before the first step)
+    sys: LiveSystem,
+    /// the live set has changed since `sys` was built
     dirty: bool,
     /// contact points of the joints (the `joints` effect)
     pub points: Vec<JointPoint>,
     joint_settings: JointSolveSettings,
     /// joint point of each side-a node
-    point_of_a: std::collections::HashMap<u32, u32>,
-    /// joint points of each (joint, zone)
+    point_of_a: HashMap<u32, u32>,
     /// per zone, its points inside the grout stops
     zone_inner_points: HashMap<(u32, u32), Vec<u32>>,
-    initial_gap: f64,
-    grout_moduli: [f64; 3],
-    grout_min_thickness: f64,
     pub state: MechState,
     pub stats: MechStats,
+}
+
+/// Per-element constants of the mechanical problem, computed once.
+struct ElementTables {
+    /// Gauss points of each element
+    gauss: Vec<[SolidGauss; 8]>,
+    /// stiffness at unit modulus (the modulus ages, ν does not)
+    k_unit: Vec<Mat24>,
+    /// Poisson's ratio
+    nu: Vec<f64>,
+    /// thermal expansion [1/°C], zero without the `thermal_strain` effect
+    alpha: Vec<f64>,
+    /// density [kg/m³]
+    density: Vec<f64>,
+    /// concrete (ageing, creeping) or rock (elastic)
+    concrete: Vec<bool>,
+    /// the rock's modulus (0 without rock elements) [Pa]
+    rock_modulus: f64,
+}
+
+impl ElementTables {
+    fn new(mesh: &Mesh, settings: &MechanicsSettings) -> Result<ElementTables, MechError> {
+        let c = &settings.concrete;
+        let n_el = mesh.elements.len();
+        let mut t = ElementTables {
+            gauss: Vec::with_capacity(n_el),
+            k_unit: Vec::with_capacity(n_el),
+            nu: vec![],
+            alpha: vec![],
+            density: vec![],
+            concrete: vec![],
+            rock_modulus: 0.0,
+        };
+        for (e, part) in mesh.parts.iter().enumerate() {
+            let coords = mesh.element_coords(e);
+            let g = elasticity::gauss_points(&coords)
+                .map_err(|source| MechError::Element { element: e, source })?;
+            let (n, a, rho, is_c) = match part {
+                Part::Concrete { .. } => (c.poisson, c.expansion_per_c, c.density_kg_m3, true),
+                Part::Rock => {
+                    let r = settings.rock.as_ref().ok_or(MechError::NoRock)?;
+                    t.rock_modulus = r.modulus_pa;
+                    (r.poisson, r.expansion_per_c, r.density_kg_m3, false)
+                }
+            };
+            t.k_unit
+                .push(elasticity::stiffness(&g, &elasticity::isotropic_d(1.0, n)));
+            t.gauss.push(g);
+            t.nu.push(n);
+            t.alpha.push(if settings.thermal_strain { a } else { 0.0 });
+            t.density.push(rho);
+            t.concrete.push(is_c);
+        }
+        Ok(t)
+    }
+}
+
+impl MechState {
+    /// The state before the first pour: only the rock lives, born
+    /// stress-free at day 0.
+    fn before_pours(
+        n_nodes: usize,
+        concrete: &[bool],
+        n_points: usize,
+        n_creep: usize,
+    ) -> MechState {
+        let n_el = concrete.len();
+        let mut state = MechState {
+            joints: vec![JointPointState::UNPAIRED; n_points],
+            f_contact: vec![0.0; 3 * n_nodes],
+            u: vec![0.0; 3 * n_nodes],
+            live: vec![false; n_el],
+            birth_day: vec![f64::NAN; n_el],
+            stress: vec![[[0.0; 6]; 8]; n_el],
+            creep: if n_creep > 0 {
+                vec![CreepState::new(n_creep); 8 * n_el]
+            } else {
+                Vec::new()
+            },
+            f_ext: vec![0.0; 3 * n_nodes],
+            water_load: vec![0.0; 3 * n_nodes],
+            weight_applied: vec![false; n_el],
+        };
+        for e in (0..n_el).filter(|&e| !concrete[e]) {
+            state.live[e] = true;
+            state.birth_day[e] = 0.0;
+            // The foundation's own weight is in equilibrium with the ground
+            // before construction: it does not strain the rock.
+            state.weight_applied[e] = true;
+        }
+        state
+    }
+}
+
+/// The step's linear system before supports, contact and external loads,
+/// and what its commit needs per live element.
+struct StepAssembly {
+    a: SparseSym,
+    b: Vec<f64>,
+    /// creep recursion coefficients, per element slot of the live system
+    coeffs: Vec<StepCoefficients>,
+    /// strain increments imposed at constant stress, per slot and Gauss point
+    pseudo: Vec<[[f64; 6]; 8]>,
 }
 
 impl MechanicsModel {
     /// Builds the model; rock elements are born (stress-free) at day 0.
     pub fn new(
         mesh: &Mesh,
-        scene: &Scene,
+        settings: &MechanicsSettings,
         supports: &Supports,
     ) -> Result<MechanicsModel, MechError> {
-        let c = &scene.concrete;
-        let modulus = c.modulus.ok_or(MechError::Missing("concrete.modulus"))?;
-        let nu_c = c.poisson.ok_or(MechError::Missing("concrete.poisson"))?;
-        let n_el = mesh.elements.len();
-        let (mut gauss, mut k_unit) = (Vec::with_capacity(n_el), Vec::with_capacity(n_el));
-        let (mut nu, mut alpha, mut density, mut concrete) = (vec![], vec![], vec![], vec![]);
-        let mut rock_modulus = 0.0;
-        for (e, part) in mesh.parts.iter().enumerate() {
-            let coords = mesh.element_coords(e);
-            let g = elasticity::gauss_points(&coords)
-                .map_err(|source| MechError::Element { element: e, source })?;
-            let (n, a, rho, is_c) = match part {
-                Part::Concrete { .. } => (
-                    nu_c,
-                    c.expansion_per_c.unwrap_or(0.0),
-                    c.density_kg_m3,
-                    true,
-                ),
-                Part::Rock => {
-                    let r = scene
-                        .rock
-                        .as_ref()
-                        .ok_or(MechError::Missing("[rock] table"))?;
-                    rock_modulus = r.modulus_pa.ok_or(MechError::Missing("rock.modulus_pa"))?;
-                    (
-                        r.poisson.unwrap_or(0.25),
-                        r.expansion_per_c.unwrap_or(0.0),
-                        r.density_kg_m3,
-                        false,
-                    )
-                }
-            };
-            k_unit.push(elasticity::stiffness(&g, &elasticity::isotropic_d(1.0, n)));
-            gauss.push(g);
-            nu.push(n);
-            alpha.push(if scene.has(Effect::ThermalStrain) {
-                a
-            } else {
-                0.0
-            });
-            density.push(rho);
-            concrete.push(is_c);
-        }
+        let tables = ElementTables::new(mesh, settings)?;
         let mut supported = vec![false; 3 * mesh.nodes.len()];
         for &(node, comp) in &supports.fixed {
             supported[3 * node as usize + comp as usize] = true;
         }
-        let mut lift_elems: std::collections::HashMap<(u32, u32), Vec<u32>> = Default::default();
-        for (e, part) in mesh.parts.iter().enumerate() {
-            if let Part::Concrete { block, lift } = part {
-                lift_elems
-                    .entry((*block, *lift))
-                    .or_default()
-                    .push(e as u32);
-            }
-        }
-        let creep_law = if scene.has(Effect::Creep) {
-            c.creep.clone()
-        } else {
-            None
-        };
-        let points = if scene.has(Effect::Joints) {
+        let points = if settings.joints {
             build_points(mesh).map_err(|source| MechError::Contact { day: 0.0, source })?
         } else {
             Vec::new()
         };
-        let j = &scene.joints;
-        // Gaps are compared to 1e-10 of the model's size, forces to 1e-9 of
-        // the step's largest force: the same decisions in m/N and mm/MPa units.
-        let (lo, hi) = mesh
-            .nodes
-            .iter()
-            .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
-                (
-                    std::array::from_fn(|k| lo[k].min(p[k])),
-                    std::array::from_fn(|k| hi[k].max(p[k])),
-                )
-            });
-        let size = (0..3)
-            .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let joint_settings = JointSolveSettings {
-            method: scene.solver.contact,
-            mu_static: j.mu_static,
-            mu_kinetic: j.mu_kinetic,
-            max_iterations: scene.solver.contact_max_iterations as usize,
-            gap_tolerance: 1e-10 * size,
-            force_tolerance: 1e-9,
-            bond_strength: j.bond_strength_pa,
-        };
-        let n_creep = creep_law.as_ref().map_or(0, |l| l.n_terms());
-        let mut model = MechanicsModel {
-            gauss,
-            k_unit,
-            nu,
-            alpha,
-            density,
-            concrete,
-            modulus,
-            rock_modulus,
-            creep_law,
+        let n_creep = settings.concrete.creep.as_ref().map_or(0, |l| l.n_terms());
+        let sys = LiveSystem::empty(&points, mesh.nodes.len())
+            .map_err(|source| MechError::Live { day: 0.0, source })?;
+        let state =
+            MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
+        Ok(MechanicsModel {
+            tables,
+            settings: settings.clone(),
             no_creep: CreepLaw { terms: Vec::new() },
-            autogenous: if scene.has(Effect::Autogenous) {
-                c.autogenous
-            } else {
-                None
-            },
-            thermal_strain: scene.has(Effect::ThermalStrain),
-            self_weight: scene.has(Effect::SelfWeight),
-            reservoir_load: scene.has(Effect::ReservoirLoad),
             node_xyz: mesh.nodes.clone(),
             elements: mesh.elements.clone(),
             thermal_dof: mesh.thermal_dof.clone(),
-            lift_elems,
+            lift_elems: mesh.lift_elements(),
             supported,
             prescribed: Vec::new(),
             wet_faces: mesh
@@ -295,51 +304,19 @@ impl MechanicsModel {
                 .filter(|s| s.kind == SurfaceKind::Wet)
                 .map(|s| (s.elem, s.face))
                 .collect(),
-            sys: None,
+            sys,
             dirty: true,
-            joint_settings,
+            joint_settings: joint_solve_settings(mesh, &settings.joint),
             point_of_a: points
                 .iter()
                 .enumerate()
                 .map(|(i, p)| (p.a, i as u32))
                 .collect(),
             zone_inner_points: inside_grout_stops(mesh, &points),
-            initial_gap: j.initial_gap_m,
-            grout_moduli: [
-                j.grout_shear_modulus_pa,
-                j.grout_shear_modulus_pa,
-                j.grout_modulus_pa,
-            ],
-            grout_min_thickness: j.grout_min_thickness_m,
-            state: MechState {
-                joints: vec![JointPointState::UNPAIRED; points.len()],
-                f_contact: vec![0.0; 3 * mesh.nodes.len()],
-                u: vec![0.0; 3 * mesh.nodes.len()],
-                live: vec![false; n_el],
-                birth_day: vec![f64::NAN; n_el],
-                stress: vec![[[0.0; 6]; 8]; n_el],
-                creep: if n_creep > 0 {
-                    vec![CreepState::new(n_creep); 8 * n_el]
-                } else {
-                    Vec::new()
-                },
-                f_ext: vec![0.0; 3 * mesh.nodes.len()],
-                water_load: vec![0.0; 3 * mesh.nodes.len()],
-                weight_applied: vec![false; n_el],
-            },
+            state,
             stats: MechStats::default(),
             points,
-        };
-        for e in 0..n_el {
-            if !model.concrete[e] {
-                model.state.live[e] = true;
-                model.state.birth_day[e] = 0.0;
-                // The foundation's own weight is in equilibrium with the ground
-                // before construction: it does not strain the rock.
-                model.state.weight_applied[e] = true;
-            }
-        }
-        Ok(model)
+        })
     }
 
     /// Restores a checkpointed state ([`MechanicsModel::state`] of a run of
@@ -348,7 +325,6 @@ impl MechanicsModel {
     pub fn restore(&mut self, state: &MechState) {
         self.state = state.clone();
         self.prescribed.clear();
-        self.sys = None;
         self.dirty = true;
     }
 
@@ -386,10 +362,11 @@ impl MechanicsModel {
                 // A block cast against its neighbour starts touching it: the
                 // first guess is closed (most new pairs are pressed by the
                 // fresh concrete's weight and expansion), open with a gap.
-                let closed = self.initial_gap == 0.0 && self.joint_settings.mu_static > 0.0;
+                let gap = self.settings.joint.initial_gap_m;
+                let closed = gap == 0.0 && self.joint_settings.mu_static > 0.0;
                 *st = JointPointState {
                     paired: true,
-                    gap: self.initial_gap,
+                    gap,
                     state: if closed {
                         PointState::Stick
                     } else {
@@ -402,7 +379,7 @@ impl MechanicsModel {
         let sys = LiveSystem::build(
             &self.elements,
             &self.state.live,
-            &self.k_unit,
+            &self.tables.k_unit,
             &self.points,
             &pair_live,
             &self.supported,
@@ -411,7 +388,7 @@ impl MechanicsModel {
         self.stats.symbolic += 1;
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
-        self.sys = Some(sys);
+        self.sys = sys;
         self.dirty = false;
         Ok(())
     }
@@ -433,6 +410,12 @@ impl MechanicsModel {
     /// (at least the scene's floor) and which keeps the present contact force.
     /// Returns the number of points grouted.
     pub fn grout(&mut self, joint: u32, zone: u32, day: f64) -> usize {
+        let j = &self.settings.joint;
+        let moduli = [
+            j.grout_shear_modulus_pa,
+            j.grout_shear_modulus_pa,
+            j.grout_modulus_pa,
+        ];
         let mut n = 0;
         for (p, pt) in self.points.iter().enumerate() {
             let st = &mut self.state.joints[p];
@@ -440,12 +423,12 @@ impl MechanicsModel {
                 continue;
             }
             let aperture = st.gap.max(0.0);
-            let thickness = aperture.max(self.grout_min_thickness);
+            let thickness = aperture.max(j.grout_min_thickness_m);
             st.grout = Some(Grout {
                 day,
                 aperture,
                 thickness,
-                stiffness: self.grout_moduli.map(|d| pt.area * d / thickness),
+                stiffness: moduli.map(|d| pt.area * d / thickness),
                 cracked_day: None,
             });
             st.gap = 0.0;
@@ -458,15 +441,16 @@ impl MechanicsModel {
     fn coefficients(&self, e: usize, t0: f64, t1: f64) -> Result<StepCoefficients, MechError> {
         let birth = self.state.birth_day[e];
         let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
-        let res = if self.concrete[e] {
+        let res = if self.tables.concrete[e] {
+            let concrete = &self.settings.concrete;
             creep::coefficients(
-                &self.modulus,
-                self.creep_law.as_ref().unwrap_or(&self.no_creep),
+                &concrete.modulus,
+                concrete.creep.as_ref().unwrap_or(&self.no_creep),
                 age0,
                 age1,
             )
         } else {
-            creep::coefficients(&self.rock_modulus, &self.no_creep, age0, age1)
+            creep::coefficients(&self.tables.rock_modulus, &self.no_creep, age0, age1)
         };
         res.map_err(|source| MechError::Age {
             element: e,
@@ -479,7 +463,7 @@ impl MechanicsModel {
     fn gauss_temperatures(&self, e: usize, temps: &[f64]) -> [f64; 8] {
         let conn = &self.elements[e];
         std::array::from_fn(|g| {
-            let n = crate::fem::hex8::shape(self.gauss[e][g].xi);
+            let n = crate::fem::hex8::shape(self.tables.gauss[e][g].xi);
             (0..8)
                 .map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize])
                 .sum()
@@ -489,7 +473,7 @@ impl MechanicsModel {
     /// Hydrostatic load of the water at `level` on the live wet faces, per dof.
     fn water_load(&self, level: Option<f64>) -> Result<Vec<f64>, MechError> {
         let mut f = vec![0.0; self.state.u.len()];
-        let Some(level) = level.filter(|_| self.reservoir_load) else {
+        let Some(level) = level.filter(|_| self.settings.reservoir_load) else {
             return Ok(f);
         };
         for &(e, face) in &self.wet_faces {
@@ -534,10 +518,42 @@ impl MechanicsModel {
                 .map_err(|source| MechError::Live { day: t1, source })?;
         }
         let t_asm = Instant::now();
-        let sys = self.sys.as_ref().expect("built");
-        let n = sys.n;
+        let StepAssembly {
+            a,
+            mut b,
+            coeffs,
+            pseudo,
+        } = self.assemble(t0, t1, temps)?;
+        let (df_ext, water) = self.external_loads(water_level)?;
+        let ext = self.sys.reduce(&df_ext, &self.points);
+        for i in 0..self.sys.n {
+            b[i] += ext[i];
+        }
+        let prescribed = self.take_prescribed()?;
+        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
+
+        let x = if self.sys.pairs.is_empty() {
+            self.solve_plain(a, b, &prescribed, t1)?
+        } else {
+            self.solve_joints(&a, &b, &prescribed, t1)?
+        };
+
+        self.commit(&x, &coeffs, &pseudo, &df_ext, water);
+        self.stats.steps += 1;
+        Ok(())
+    }
+
+    /// The stiffness of the live elements at their mid-step ages and the
+    /// loads of the strains the step imposes.
+    fn assemble(
+        &self,
+        t0: f64,
+        t1: f64,
+        temps: Option<(&[f64], &[f64])>,
+    ) -> Result<StepAssembly, MechError> {
+        let sys = &self.sys;
         let mut a = SparseSym::new(sys.pattern.clone());
-        let mut b = vec![0.0; n];
+        let mut b = vec![0.0; sys.n];
         let mut coeffs = Vec::with_capacity(sys.elements.len());
         let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
         for (slot, el) in sys.elements.iter().enumerate() {
@@ -545,53 +561,76 @@ impl MechanicsModel {
             let c = self.coefficients(e, t0, t1)?;
             match &el.k_unit {
                 Some(k) => a.add_element_scaled(slot, c.e_eff, k),
-                None => a.add_element_scaled(slot, c.e_eff, &self.k_unit[e]),
+                None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
             }
-            // Strains the step imposes at constant stress: creep, thermal, autogenous.
-            let mut eps = [[0.0; 6]; 8];
-            if !self.state.creep.is_empty() && self.concrete[e] {
-                for (g, eg) in eps.iter_mut().enumerate() {
-                    *eg = creep::eta(&self.state.creep[8 * e + g], &c);
-                }
-            }
-            let mut volumetric = [0.0; 8];
-            if let (true, Some((before, after))) =
-                (self.thermal_strain && self.alpha[e] != 0.0, temps)
-            {
-                let (t_a, t_b) = (
-                    self.gauss_temperatures(e, before),
-                    self.gauss_temperatures(e, after),
-                );
-                for g in 0..8 {
-                    volumetric[g] += self.alpha[e] * (t_b[g] - t_a[g]);
-                }
-            }
-            if let (Some(law), true) = (&self.autogenous, self.concrete[e]) {
-                let dg = law.increment(c.age0, c.age1);
-                volumetric.iter_mut().for_each(|v| *v += dg);
-            }
-            for g in 0..8 {
-                for k in 0..3 {
-                    eps[g][k] += volumetric[g];
-                }
-            }
+            let eps = self.imposed_strain(e, &c, temps);
             if eps.iter().any(|g| g.iter().any(|&v| v != 0.0)) {
-                let d = elasticity::isotropic_d(c.e_eff, self.nu[e]);
-                let load = elasticity::initial_strain_load(&self.gauss[e], &d, &eps);
+                let d = elasticity::isotropic_d(c.e_eff, self.tables.nu[e]);
+                let load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
                 sys.add_element_vector(slot, &load, &self.points, &mut b);
             }
             coeffs.push(c);
             pseudo.push(eps);
         }
-        // External load increments: self-weight of the newborn, water.
+        Ok(StepAssembly {
+            a,
+            b,
+            coeffs,
+            pseudo,
+        })
+    }
+
+    /// Strains the step imposes on element `e` at constant stress, per Gauss
+    /// point: creep, thermal, autogenous.
+    fn imposed_strain(
+        &self,
+        e: usize,
+        c: &StepCoefficients,
+        temps: Option<(&[f64], &[f64])>,
+    ) -> [[f64; 6]; 8] {
+        let mut eps = [[0.0; 6]; 8];
+        if !self.state.creep.is_empty() && self.tables.concrete[e] {
+            for (g, eg) in eps.iter_mut().enumerate() {
+                *eg = creep::eta(&self.state.creep[8 * e + g], c);
+            }
+        }
+        let mut volumetric = [0.0; 8];
+        if let (true, Some((before, after))) = (
+            self.settings.thermal_strain && self.tables.alpha[e] != 0.0,
+            temps,
+        ) {
+            let (t_a, t_b) = (
+                self.gauss_temperatures(e, before),
+                self.gauss_temperatures(e, after),
+            );
+            for g in 0..8 {
+                volumetric[g] += self.tables.alpha[e] * (t_b[g] - t_a[g]);
+            }
+        }
+        if let (Some(law), true) = (&self.settings.concrete.autogenous, self.tables.concrete[e]) {
+            let dg = law.increment(c.age0, c.age1);
+            volumetric.iter_mut().for_each(|v| *v += dg);
+        }
+        for (eg, v) in eps.iter_mut().zip(volumetric) {
+            for e in &mut eg[..3] {
+                *e += v;
+            }
+        }
+        eps
+    }
+
+    /// External load increments of the step per global dof (the weight of
+    /// the newborn elements, the change of the water load) and the new water
+    /// load.
+    fn external_loads(&self, water_level: Option<f64>) -> Result<(Vec<f64>, Vec<f64>), MechError> {
         let mut df_ext = vec![0.0; self.state.u.len()];
-        if self.self_weight {
-            for el in &sys.elements {
+        if self.settings.self_weight {
+            for el in &self.sys.elements {
                 let e = el.elem as usize;
                 if !self.state.weight_applied[e] {
                     let w = elasticity::body_force_at(
-                        &self.gauss[e],
-                        [0.0, 0.0, -self.density[e] * GRAVITY],
+                        &self.tables.gauss[e],
+                        [0.0, 0.0, -self.tables.density[e] * GRAVITY],
                     );
                     let gd = elasticity::element_dofs(&self.elements[e]);
                     for k in 0..24 {
@@ -604,14 +643,16 @@ impl MechanicsModel {
         for i in 0..water.len() {
             df_ext[i] += water[i] - self.state.water_load[i];
         }
-        let ext = sys.reduce(&df_ext, &self.points);
-        for i in 0..n {
-            b[i] += ext[i];
-        }
-        let mut prescribed = vec![0.0; n];
+        Ok((df_ext, water))
+    }
+
+    /// The prescribed increments in the reduced unknowns; each is used by
+    /// one step only.
+    fn take_prescribed(&mut self) -> Result<Vec<f64>, MechError> {
+        let mut prescribed = vec![0.0; self.sys.n];
         for &(g, v) in &self.prescribed {
-            let i = sys.index_of[g as usize];
-            if i == super::live::NONE {
+            let i = self.sys.index_of[g as usize];
+            if i == NONE {
                 return Err(MechError::NotSupported {
                     node: g / 3,
                     comp: (g % 3) as u8,
@@ -620,65 +661,81 @@ impl MechanicsModel {
             prescribed[i as usize] = v;
         }
         self.prescribed.clear();
-        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
+        Ok(prescribed)
+    }
 
-        let x = if sys.pairs.is_empty() {
-            self.solve_plain(a, b, &prescribed, t1)?
-        } else {
-            let t_joint = Instant::now();
-            let sys = self.sys.as_mut().expect("built");
-            let step = StepSystem {
-                a: &a,
-                b: &b,
-                prescribed: &prescribed,
-                points: &self.points,
-                day: t1,
-            };
-            let out = contact_step::solve(&step, sys, &mut self.state.joints, &self.joint_settings)
-                .map_err(|source| MechError::Joints { day: t1, source })?;
-            self.stats.numeric += out.factorizations;
-            self.stats.seconds_numeric += out.seconds_numeric;
-            self.stats.contact_iterations += out.iterations;
-            self.stats.kept_closed_tension =
-                self.stats.kept_closed_tension.max(out.kept_closed_tension);
-            self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
-            out.x
+    /// The step with joints: the contact solve of [`contact_step`].
+    fn solve_joints(
+        &mut self,
+        a: &SparseSym,
+        b: &[f64],
+        prescribed: &[f64],
+        day: f64,
+    ) -> Result<Vec<f64>, MechError> {
+        let t_joint = Instant::now();
+        let step = StepSystem {
+            a,
+            b,
+            prescribed,
+            points: &self.points,
+            day,
         };
+        let out = contact_step::solve(
+            &step,
+            &mut self.sys,
+            &mut self.state.joints,
+            &self.joint_settings,
+        )
+        .map_err(|source| MechError::Joints { day, source })?;
+        self.stats.numeric += out.factorizations;
+        self.stats.seconds_numeric += out.seconds_numeric;
+        self.stats.contact_iterations += out.iterations;
+        self.stats.kept_closed_tension =
+            self.stats.kept_closed_tension.max(out.kept_closed_tension);
+        self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
+        Ok(out.x)
+    }
 
-        // Commit: displacements, stresses, creep states, loads, contact forces.
-        let sys = self.sys.as_ref().expect("built");
+    /// Commits the step's solution `x`: displacements, stresses, creep
+    /// states, loads, contact forces.
+    fn commit(
+        &mut self,
+        x: &[f64],
+        coeffs: &[StepCoefficients],
+        pseudo: &[[[f64; 6]; 8]],
+        df_ext: &[f64],
+        water: Vec<f64>,
+    ) {
         let mut du = vec![0.0; self.state.u.len()];
-        sys.expand(&x, &self.points, &mut du);
+        self.sys.expand(x, &self.points, &mut du);
         // du is zero off the live nodes.
         for (u, d) in self.state.u.iter_mut().zip(&du) {
             *u += d;
         }
-        for (slot, el) in sys.elements.iter().enumerate() {
+        for (slot, el) in self.sys.elements.iter().enumerate() {
             let e = el.elem as usize;
             let gd = elasticity::element_dofs(&self.elements[e]);
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
-            let nu = Poisson(self.nu[e]);
-            for g in 0..8 {
-                let deps = elasticity::strain(&self.gauss[e][g], &ue);
-                let mut net = [0.0; 6];
-                for k in 0..6 {
-                    net[k] = deps[k] - pseudo[slot][g][k];
-                }
+            let nu = Poisson(self.tables.nu[e]);
+            for (g, (gauss, imposed)) in self.tables.gauss[e].iter().zip(&pseudo[slot]).enumerate()
+            {
+                let deps = elasticity::strain(gauss, &ue);
+                let net: [f64; 6] = std::array::from_fn(|k| deps[k] - imposed[k]);
                 let ds = nu.q_apply(&net).map(|v| c.e_eff * v);
-                for k in 0..6 {
-                    self.state.stress[e][g][k] += ds[k];
+                for (s, d) in self.state.stress[e][g].iter_mut().zip(ds) {
+                    *s += d;
                 }
-                if !self.state.creep.is_empty() && self.concrete[e] {
+                if !self.state.creep.is_empty() && self.tables.concrete[e] {
                     creep::commit(&mut self.state.creep[8 * e + g], c, nu, &ds);
                 }
             }
-            if self.self_weight {
+            if self.settings.self_weight {
                 self.state.weight_applied[e] = true;
             }
         }
-        for i in 0..df_ext.len() {
-            self.state.f_ext[i] += df_ext[i];
+        for (f, d) in self.state.f_ext.iter_mut().zip(df_ext) {
+            *f += d;
         }
         self.state.water_load = water;
         self.state.f_contact.iter_mut().for_each(|f| *f = 0.0);
@@ -688,13 +745,11 @@ impl MechanicsModel {
                 continue;
             }
             let global = pt.frame.to_global(st.force);
-            for c in 0..3 {
-                self.state.f_contact[3 * pt.b as usize + c] += global[c];
-                self.state.f_contact[3 * pt.a as usize + c] -= global[c];
+            for (c, g) in global.iter().enumerate() {
+                self.state.f_contact[3 * pt.b as usize + c] += g;
+                self.state.f_contact[3 * pt.a as usize + c] -= g;
             }
         }
-        self.stats.steps += 1;
-        Ok(())
     }
 
     /// The step without joints: supports only, one factorisation, one solve.
@@ -705,7 +760,7 @@ impl MechanicsModel {
         prescribed: &[f64],
         day: f64,
     ) -> Result<Vec<f64>, MechError> {
-        let sys = self.sys.as_mut().expect("built");
+        let sys = &mut self.sys;
         a.apply_dirichlet_with_rhs(&sys.supported, prescribed, &mut b);
         let t_num = Instant::now();
         sys.solver
@@ -720,23 +775,24 @@ impl MechanicsModel {
             .map_err(|source| MechError::Solve { day, source })?;
         self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
         let residual = crate::fem::relative_residual(&a, &x, &b);
-        if !(residual <= RESIDUAL_TOLERANCE) {
+        if residual.is_nan() || residual > RESIDUAL_TOLERANCE {
             return Err(MechError::Residual { day, residual });
         }
         Ok(x)
     }
 
     /// ‖Σ Bᵀσ − f_ext − f_contact‖ / ‖f_ext + f_contact‖ (or the internal-force
-    /// scale when no load) over the free live dofs: the accumulated stresses
-    /// must balance the accumulated loads and joint forces.
+    /// scale when no load) over the free dofs live in the last step (0
+    /// before the first): the accumulated stresses must balance the
+    /// accumulated loads and joint forces.
     pub fn equilibrium_residual(&self) -> f64 {
-        let Some(sys) = &self.sys else { return 0.0 };
+        let sys = &self.sys;
         let mut fint = vec![0.0; self.state.u.len()];
         let mut live = vec![false; self.state.u.len()];
         let mut scale = 0.0f64;
         for el in &sys.elements {
             let e = el.elem as usize;
-            let f = elasticity::internal_force(&self.gauss[e], &self.state.stress[e]);
+            let f = elasticity::internal_force(&self.tables.gauss[e], &self.state.stress[e]);
             let gd = elasticity::element_dofs(&self.elements[e]);
             for k in 0..24 {
                 fint[gd[k] as usize] += f[k];
@@ -764,7 +820,7 @@ impl MechanicsModel {
         let pair = &mesh.face_pairs[zp.pair as usize];
         let n = crate::mesh::quad_shape(zp.s, zp.t);
         let (mut value, mut label, mut best) = (0.0, JointState::Stick, -1.0);
-        for k in 0..4 {
+        for (k, &nk) in n.iter().enumerate() {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
             }
@@ -773,9 +829,9 @@ impl MechanicsModel {
             if !st.paired {
                 return None;
             }
-            value += n[k] * st.aperture();
-            if n[k] > best {
-                best = n[k];
+            value += nk * st.aperture();
+            if nk > best {
+                best = nk;
                 label = st.label();
             }
         }
@@ -795,9 +851,37 @@ impl MechanicsModel {
             .min_by(|x, y| x.0.total_cmp(&y.0))
     }
 
-    /// Number of live mechanical dofs.
+    /// Number of mechanical dofs live in the last step (0 before the first).
     pub fn live_dofs(&self) -> usize {
-        self.sys.as_ref().map_or(0, |s| s.n)
+        self.sys.n
+    }
+}
+
+/// The joint solver's settings for `mesh`. Gaps are compared to 1e-10 of
+/// the model's size, forces to 1e-9 of the step's largest force: the same
+/// decisions in m/N and mm/MPa units.
+fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettings {
+    let (lo, hi) = mesh
+        .nodes
+        .iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+            (
+                std::array::from_fn(|k| lo[k].min(p[k])),
+                std::array::from_fn(|k| hi[k].max(p[k])),
+            )
+        });
+    let size = (0..3)
+        .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    JointSolveSettings {
+        method: joint.solver,
+        mu_static: joint.mu_static,
+        mu_kinetic: joint.mu_kinetic,
+        max_iterations: joint.max_iterations,
+        gap_tolerance: 1e-10 * size,
+        force_tolerance: 1e-9,
+        bond_strength: joint.bond_strength_pa,
     }
 }
 

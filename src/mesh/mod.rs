@@ -414,6 +414,23 @@ impl Mesh {
         &elems[offsets[l - 1]..offsets[l]]
     }
 
+    /// [`Mesh::elements_of_lift`] of every lift that has elements, keyed by
+    /// (block, lift): the owned copy the physics models keep, since they
+    /// outlive their borrow of the mesh.
+    pub fn lift_elements(&self) -> HashMap<(u32, u32), Vec<u32>> {
+        let mut map = HashMap::new();
+        for (b, (_, offsets)) in self.index().blocks.iter().enumerate() {
+            let block = b as u32 + 1;
+            for lift in 1..offsets.len() as u32 {
+                let elems = self.elements_of_lift(block, lift);
+                if !elems.is_empty() {
+                    map.insert((block, lift), elems.to_vec());
+                }
+            }
+        }
+        map
+    }
+
     /// All elements of `block` (1-based), sorted by lift then element; empty if unknown.
     pub fn elements_of_block(&self, block: u32) -> &[u32] {
         (block as usize)

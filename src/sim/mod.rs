@@ -164,14 +164,15 @@ impl<'a> Simulation<'a> {
             } else {
                 None
             };
-            Some(ThermalModel::new(mesh, scene, stages, air, water)?)
+            let settings = crate::thermal::ThermalSettings::from_scene(scene);
+            Some(ThermalModel::new(mesh, &settings, stages, air, water)?)
         } else {
             None
         };
         let mechanics = if scene.any_mechanical() {
             Some(MechanicsModel::new(
                 mesh,
-                scene,
+                &crate::mechanics::MechanicsSettings::from_scene(scene),
                 &Supports::far_boundary(mesh),
             )?)
         } else {

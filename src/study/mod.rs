@@ -287,7 +287,8 @@ pub fn full_dam_step_cost(
     mesh: &crate::mesh::Mesh,
     steps: usize,
 ) -> Result<FullDamCost, ThermalError> {
-    let mut th = crate::thermal::ThermalModel::new(mesh, scene, Vec::new(), None, None)?;
+    let settings = crate::thermal::ThermalSettings::from_scene(scene);
+    let mut th = crate::thermal::ThermalModel::new(mesh, &settings, Vec::new(), None, None)?;
     for (block, lift) in all_lifts(mesh) {
         th.pour(block, lift, 0.0, 15.0);
     }
@@ -344,7 +345,7 @@ pub fn full_dam_mechanics_step_cost(
 ) -> Result<FullDamMechCost, MechError> {
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
-        scene,
+        &crate::mechanics::MechanicsSettings::from_scene(scene),
         &crate::mechanics::Supports::far_boundary(mesh),
     )?;
     for (block, lift) in all_lifts(mesh) {

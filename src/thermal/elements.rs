@@ -8,13 +8,14 @@ use crate::fem::hex8::FACES;
 use crate::fem::thermal_kernels;
 use crate::fem::ElementError;
 use crate::mesh::{Mesh, Part};
-use crate::scene::Scene;
+
+use super::settings::ThermalSettings;
 
 type Mat8 = SMatrix<f64, 8, 8>;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ElementDataError {
-    #[error("the mesh has rock elements but the scene has no [rock] table")]
+    #[error("the mesh has rock elements but the thermal settings have no rock (the scene's [rock] table)")]
     NoRock,
     #[error(transparent)]
     Element(#[from] ElementError),
@@ -35,7 +36,10 @@ pub struct ElementData {
 }
 
 impl ElementData {
-    pub fn new(mesh: &Mesh, scene: &Scene) -> Result<ElementData, ElementDataError> {
+    /// The data of every element of `mesh`, live or not. The rock's
+    /// settings are needed only when the mesh has rock elements (a scene's
+    /// validation asks for `[rock]` whenever its geometry has rock).
+    pub fn new(mesh: &Mesh, settings: &ThermalSettings) -> Result<ElementData, ElementDataError> {
         let n = mesh.elements.len();
         let mut data = ElementData {
             coords: Vec::with_capacity(n),
@@ -44,17 +48,22 @@ impl ElementData {
             ke: Vec::with_capacity(n),
             cap_lumped: Vec::with_capacity(n),
         };
-        let c = &scene.concrete;
         for (e, conn) in mesh.elements.iter().enumerate() {
             let coords: [[f64; 3]; 8] = std::array::from_fn(|k| mesh.nodes[conn[k] as usize]);
-            let (rho_c, lambda_day) = match mesh.parts[e] {
-                Part::Concrete { .. } => (c.heat_capacity_j_m3k(), c.conductivity_j_per_m_day_k()),
+            let material = match mesh.parts[e] {
+                Part::Concrete { .. } => settings.concrete,
                 Part::Rock => {
-                    // scene validation guarantees [rock] when the mesh has rock
-                    let r = scene.rock.as_ref().ok_or(ElementDataError::NoRock)?;
-                    (r.heat_capacity_j_m3k(), r.conductivity_j_per_m_day_k())
+                    settings
+                        .rock
+                        .as_ref()
+                        .ok_or(ElementDataError::NoRock)?
+                        .material
                 }
             };
+            let (rho_c, lambda_day) = (
+                material.heat_capacity_j_m3k,
+                material.conductivity_j_per_m_day_k,
+            );
             data.ke
                 .push(thermal_kernels::conductivity(&coords, lambda_day)?);
             data.cap_lumped

@@ -114,6 +114,27 @@ pub struct LiveSystem {
 }
 
 impl LiveSystem {
+    /// The system of no live element over `n_dofs` thermal dofs: what a model
+    /// holds until its first rebuild, so that no dof reads as live before then.
+    pub fn empty(n_dofs: usize) -> LiveSystem {
+        let pattern = Arc::new(Pattern::new(0, &[] as &[[u32; 8]]));
+        LiveSystem {
+            dofs: Vec::new(),
+            index_of: vec![NONE; n_dofs],
+            elems: Vec::new(),
+            local_dofs: Vec::new(),
+            exposed: Vec::new(),
+            kh: SparseSym::new(pattern.clone()),
+            pattern,
+            cap_lumped: Vec::new(),
+            cap_consistent: None,
+            air_load: Vec::new(),
+            fixed: Vec::new(),
+            solver: None,
+            factors: Vec::new(),
+        }
+    }
+
     /// Builds the numbering, pattern and symbolic factorisation for `live_elems`.
     pub fn new(
         dof_xyz: &[[f64; 3]],
@@ -351,9 +372,9 @@ impl LiveSystem {
                 return Ok(it);
             }
             self.apply(dt, theta, &p, &mut ap, &mut masked, &mut tmp);
-            for i in 0..n {
-                if self.fixed[i] {
-                    ap[i] = 0.0;
+            for (v, &fixed) in ap.iter_mut().zip(&self.fixed) {
+                if fixed {
+                    *v = 0.0;
                 }
             }
             let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();

@@ -18,6 +18,9 @@
 //! temperature; dofs already live keep theirs. The linear system is that of
 //! the live elements only ([`live`]).
 //!
+//! The model reads no scene: [`ThermalSettings::from_scene`] resolves what it
+//! needs (materials, effects, θ, solver) once.
+//!
 //! Verified by `tests/it/thermal_closed_forms.rs`: adiabatic curves, Zhu's T̄
 //! with a stage change, the Bi = 1 slab series solution with fitted
 //! convergence rates in h and Δt, and the heat balance of a staged run.
@@ -28,6 +31,8 @@ pub mod elements;
 pub mod ledger;
 pub mod live;
 pub mod model;
+pub mod settings;
 
 pub use ledger::HeatLedger;
 pub use model::{ThermalCheckpoint, ThermalError, ThermalModel, ThermalState, ThermalStats};
+pub use settings::{RockThermal, ThermalMaterial, ThermalSettings};

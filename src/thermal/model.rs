@@ -6,15 +6,15 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::fem::solver::SolveError;
-use crate::material::{AdiabaticRise, ZhuPipe};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
-use crate::scene::{CapacityKind, Effect, Scene, ThermalSolverKind};
+use crate::scene::{CapacityKind, ThermalSolverKind};
 
 use super::boundary::{AirTemperature, Water};
 use super::cooling::{lift_increment, ActiveStage, LiftSourceInput, PlannedStage, StageStatus};
 use super::elements::{ElementData, SECONDS_PER_DAY};
 use super::ledger::HeatLedger;
 use super::live::{FaceCounter, LiveSystem, NONE};
+use super::settings::ThermalSettings;
 
 /// Relative residual above which a solve is rejected.
 const RESIDUAL_TOLERANCE: f64 = 1e-9;
@@ -51,6 +51,7 @@ pub enum ThermalError {
 /// Counters a benchmark prints; nothing here changes the answer.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ThermalStats {
+    /// steps taken
     pub steps: usize,
     /// live-set rebuilds (new pattern + symbolic factorisation)
     pub symbolic: usize,
@@ -62,10 +63,15 @@ pub struct ThermalStats {
     pub pipe_terms: usize,
     /// conjugate-gradient iterations (PCG solver)
     pub pcg_iterations: usize,
+    /// wall time of the rebuilds [s]
     pub seconds_symbolic: f64,
+    /// wall time of the numeric factorisations [s]
     pub seconds_numeric: f64,
+    /// wall time of the solves (triangular or PCG) [s]
     pub seconds_solve: f64,
+    /// wall time of the boundary reassemblies [s]
     pub seconds_assembly: f64,
+    /// largest live system [dofs]
     pub max_dofs: usize,
 }
 
@@ -74,8 +80,11 @@ pub struct ThermalStats {
 pub struct ThermalState {
     /// per thermal dof; meaningful only where a live element uses the dof
     pub temperature: Vec<f64>,
+    /// per element: born (poured, or rock)
     pub live: Vec<bool>,
+    /// per planned cooling stage
     pub status: Vec<StageStatus>,
+    /// heat gained so far, by source
     pub ledger: HeatLedger,
 }
 
@@ -90,13 +99,9 @@ pub struct ThermalCheckpoint {
 
 pub struct ThermalModel {
     pub data: ElementData,
-    rise: Option<AdiabaticRise>,
-    pipe: Option<ZhuPipe>,
+    settings: ThermalSettings,
     air: Option<AirTemperature>,
     water: Option<Water>,
-    theta: f64,
-    consistent: bool,
-    solver: crate::scene::SolverSettings,
     surface_kind: HashMap<(u32, u8), SurfaceKind>,
     dof_z: Vec<f64>,
     dof_xyz: Vec<[f64; 3]>,
@@ -106,7 +111,10 @@ pub struct ThermalModel {
     /// per lift, index of the stage running on it
     lift_stage: HashMap<(u32, u32), usize>,
     faces: FaceCounter,
-    sys: Option<LiveSystem>,
+    /// the system of the live set at the last rebuild (empty before the
+    /// first step and after a restore)
+    sys: LiveSystem,
+    /// the live set has changed since `sys` was built
     dirty: bool,
     pub state: ThermalState,
     pub stats: ThermalStats,
@@ -115,41 +123,26 @@ pub struct ThermalModel {
 impl ThermalModel {
     /// Builds the thermal model; rock elements are born at day 0 with the
     /// rock's initial field. `stages` come from cooling.csv and are ignored
-    /// unless the scene has the `pipe_cooling` effect.
+    /// without pipe cooling (`settings.pipe`); `air` and `water` are ignored
+    /// without their effects.
     pub fn new(
         mesh: &Mesh,
-        scene: &Scene,
+        settings: &ThermalSettings,
         stages: Vec<PlannedStage>,
         air: Option<AirTemperature>,
         water: Option<Water>,
     ) -> Result<ThermalModel, ThermalError> {
-        let data = ElementData::new(mesh, scene)?;
-        let pipe = if scene.has(Effect::PipeCooling) {
-            scene.pipes.as_ref().map(|layout| {
-                ZhuPipe::new(
-                    layout,
-                    scene.concrete_diffusivity_m2_per_day(),
-                    scene.concrete.conductivity_w_mk,
-                )
-            })
+        let data = ElementData::new(mesh, settings)?;
+        let stages = if settings.pipe.is_some() {
+            stages
         } else {
-            None
+            Vec::new()
         };
-        let stages = if pipe.is_some() { stages } else { Vec::new() };
         let mut dof_xyz = vec![[0.0; 3]; mesh.n_thermal_dofs];
         for (node, &d) in mesh.thermal_dof.iter().enumerate() {
             dof_xyz[d as usize] = mesh.nodes[node];
         }
         let dof_z = dof_xyz.iter().map(|p| p[2]).collect();
-        let mut lift_elems: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-        for (e, part) in mesh.parts.iter().enumerate() {
-            if let Part::Concrete { block, lift } = part {
-                lift_elems
-                    .entry((*block, *lift))
-                    .or_default()
-                    .push(e as u32);
-            }
-        }
         let surface_kind = mesh
             .surfaces
             .iter()
@@ -159,34 +152,18 @@ impl ThermalModel {
         let status = vec![StageStatus::Pending; stages.len()];
         let mut model = ThermalModel {
             data,
-            rise: if scene.has(Effect::Hydration) {
-                scene.concrete.adiabatic.clone()
-            } else {
-                None
-            },
-            pipe,
-            air: if scene.has(Effect::Ambient) {
-                air
-            } else {
-                None
-            },
-            water: if scene.has(Effect::ReservoirTemperature) {
-                water
-            } else {
-                None
-            },
-            theta: scene.time.theta,
-            consistent: scene.time.capacity == CapacityKind::Consistent,
-            solver: scene.solver.clone(),
+            settings: settings.clone(),
+            air: air.filter(|_| settings.ambient),
+            water: water.filter(|_| settings.reservoir_temperature),
             surface_kind,
             dof_z,
             dof_xyz,
-            lift_elems,
+            lift_elems: mesh.lift_elements(),
             lift_pour_day: HashMap::new(),
             stages,
             lift_stage: HashMap::new(),
             faces: FaceCounter::default(),
-            sys: None,
+            sys: LiveSystem::empty(mesh.n_thermal_dofs),
             dirty: true,
             state: ThermalState {
                 temperature: vec![0.0; mesh.n_thermal_dofs],
@@ -196,7 +173,7 @@ impl ThermalModel {
             },
             stats: ThermalStats::default(),
         };
-        if let Some(rock) = &scene.rock {
+        if let Some(rock) = &settings.rock {
             let z_ref = mesh.layer_z.first().copied().unwrap_or(0.0);
             let rock_elems: Vec<u32> = (0..n_elem as u32)
                 .filter(|&e| mesh.parts[e as usize] == Part::Rock)
@@ -410,7 +387,7 @@ impl ThermalModel {
                 self.faces.add_element(e as u32, &self.data.dofs[e]);
             }
         }
-        self.sys = None;
+        self.sys = LiveSystem::empty(self.state.temperature.len());
         self.dirty = true;
     }
 
@@ -428,6 +405,7 @@ impl ThermalModel {
         (cap > 0.0).then(|| heat / cap)
     }
 
+    /// Renumbers the live dofs and analyses the new pattern (after births).
     fn rebuild(&mut self) -> Result<(), SolveError> {
         let t = Instant::now();
         let live: Vec<u32> = (0..self.state.live.len() as u32)
@@ -438,13 +416,13 @@ impl ThermalModel {
         } else {
             Vec::new()
         };
-        let direct = self.solver.thermal == ThermalSolverKind::Cholesky;
+        let direct = self.settings.solver == ThermalSolverKind::Cholesky;
         let sys = LiveSystem::new(
             &self.dof_xyz,
             live,
             &self.data,
             exposed,
-            self.consistent,
+            self.settings.capacity == CapacityKind::Consistent,
             direct,
         )?;
         if direct {
@@ -452,7 +430,7 @@ impl ThermalModel {
         }
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n());
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
-        self.sys = Some(sys);
+        self.sys = sys;
         self.dirty = false;
         Ok(())
     }
@@ -461,8 +439,10 @@ impl ThermalModel {
         self.air.as_ref().map(|a| a.film_w_m2k() * SECONDS_PER_DAY)
     }
 
-    /// Prescribed water temperatures at `day` on submerged wet-face nodes.
-    fn water_nodes(&self, sys: &LiveSystem, day: f64) -> (Vec<bool>, Vec<f64>) {
+    /// Prescribed water temperatures at `day` on the submerged wet-face nodes
+    /// of the live system.
+    fn water_nodes(&self, day: f64) -> (Vec<bool>, Vec<f64>) {
+        let sys = &self.sys;
         let n = sys.n();
         let mut fixed = vec![false; n];
         let mut value = vec![0.0; n];
@@ -490,99 +470,148 @@ impl ThermalModel {
     /// closed at t1.
     pub fn step(&mut self, t0: f64, t1: f64) -> Result<(), ThermalError> {
         let dt = t1 - t0;
-        let theta = self.theta;
-        if self.dirty {
-            self.rebuild().map_err(|source| ThermalError::Solve {
-                day: t1,
-                dt,
-                source,
-            })?;
-            let beta = self.beta_day();
-            let t = Instant::now();
-            let sys = self.sys.as_mut().expect("rebuilt");
-            sys.assemble_kh(&self.data, beta)
-                .map_err(|source| ThermalError::Face { day: t1, source })?;
-            self.stats.assemblies += 1;
-            self.stats.seconds_assembly += t.elapsed().as_secs_f64();
+        let fixed_value = self.prepare_system(t1, dt)?;
+        let sources = self.sources(t0, t1);
+        self.stats.pipe_terms += sources.pipe_terms;
+        let (rhs, b) = self.right_hand_side(t0, t1, &sources.q, &fixed_value);
+        let x = match self.settings.solver {
+            ThermalSolverKind::Cholesky => self.solve_direct(b, t1, dt)?,
+            ThermalSolverKind::Pcg => self.solve_pcg(&b, &rhs.t_old, t1, dt)?,
+        };
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(ThermalError::NonFinite { day: t1 });
         }
-        let (fixed, fixed_value) = self.water_nodes(self.sys.as_ref().expect("built"), t1);
-        if fixed != self.sys.as_ref().expect("built").fixed {
-            let beta = self.beta_day();
-            let t = Instant::now();
-            let sys = self.sys.as_mut().expect("built");
-            sys.fixed = fixed;
-            sys.assemble_kh(&self.data, beta)
-                .map_err(|source| ThermalError::Face { day: t1, source })?;
-            self.stats.assemblies += 1;
-            self.stats.seconds_assembly += t.elapsed().as_secs_f64();
-        }
+        let (air_heat, water_heat) = self.boundary_heat(&rhs, &x, t1, dt)?;
 
-        // Heat sources of the step, per live dof [J].
-        let sys = self.sys.as_ref().expect("built");
-        let n = sys.n();
-        let mut q = vec![0.0; n];
-        let (mut hyd_heat, mut pipe_heat) = (0.0, 0.0);
-        if self.rise.is_some() || self.pipe.is_some() {
-            for (&(block, lift), &pour_day) in &self.lift_pour_day {
-                if pour_day > t0 {
-                    continue;
+        for (i, &d) in self.sys.dofs.iter().enumerate() {
+            self.state.temperature[d as usize] = x[i];
+        }
+        let ledger = &mut self.state.ledger;
+        ledger.hydration += sources.hydration;
+        ledger.pipes += sources.pipes;
+        ledger.air += air_heat;
+        ledger.water += water_heat;
+        self.stats.steps += 1;
+        self.end_stages_at_target(t1);
+        Ok(())
+    }
+
+    /// Brings the live system up to the step ending at `day`: renumbered
+    /// after births, its boundary matrix reassembled when the submerged set
+    /// changes. Returns the prescribed water temperature per live dof.
+    fn prepare_system(&mut self, day: f64, dt: f64) -> Result<Vec<f64>, ThermalError> {
+        if self.dirty {
+            self.rebuild()
+                .map_err(|source| ThermalError::Solve { day, dt, source })?;
+            self.assemble_boundary(day)?;
+        }
+        let (fixed, fixed_value) = self.water_nodes(day);
+        if fixed != self.sys.fixed {
+            self.sys.fixed = fixed;
+            self.assemble_boundary(day)?;
+        }
+        Ok(fixed_value)
+    }
+
+    /// Reassembles K + H_air of the live system for its exposed faces and
+    /// fixed nodes.
+    fn assemble_boundary(&mut self, day: f64) -> Result<(), ThermalError> {
+        let beta = self.beta_day();
+        let t = Instant::now();
+        self.sys
+            .assemble_kh(&self.data, beta)
+            .map_err(|source| ThermalError::Face { day, source })?;
+        self.stats.assemblies += 1;
+        self.stats.seconds_assembly += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The cooling stage running on a lift, as its pipe source needs it.
+    fn active_stage(&self, block: u32, lift: u32) -> Option<ActiveStage<'_>> {
+        let i = *self.lift_stage.get(&(block, lift))?;
+        match (&self.state.status[i], &self.settings.pipe) {
+            (
+                StageStatus::Active {
+                    start_day, t0_mean, ..
+                },
+                Some(pipe),
+            ) => Some(ActiveStage {
+                pipe,
+                start_day: *start_day,
+                t0_mean: *t0_mean,
+                water_temp_c: self.stages[i].water_temp_c,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Heat sources of the step over [t0, t1]: hydration and pipe cooling of
+    /// every lift poured by t0.
+    fn sources(&self, t0: f64, t1: f64) -> StepSources {
+        let sys = &self.sys;
+        let mut out = StepSources {
+            q: vec![0.0; sys.n()],
+            hydration: 0.0,
+            pipes: 0.0,
+            pipe_terms: 0,
+        };
+        let rise = self.settings.rise.as_ref();
+        if rise.is_none() && self.settings.pipe.is_none() {
+            return out;
+        }
+        for (&(block, lift), &pour_day) in &self.lift_pour_day {
+            if pour_day > t0 {
+                continue;
+            }
+            let stage = self.active_stage(block, lift);
+            if stage.is_some() {
+                out.pipe_terms += 1;
+            }
+            let input = LiftSourceInput {
+                pour_day,
+                rise,
+                stage,
+            };
+            let inc = lift_increment(&input, t0, t1);
+            if inc.total == 0.0 && inc.hydration == 0.0 {
+                continue;
+            }
+            for &e in &self.lift_elems[&(block, lift)] {
+                let caps = &self.data.cap_lumped[e as usize];
+                for (k, &d) in self.data.dofs[e as usize].iter().enumerate() {
+                    out.q[sys.index_of[d as usize] as usize] += caps[k] * inc.total;
                 }
-                let stage = self.lift_stage.get(&(block, lift)).and_then(|&i| {
-                    match (&self.state.status[i], &self.pipe) {
-                        (
-                            StageStatus::Active {
-                                start_day, t0_mean, ..
-                            },
-                            Some(pipe),
-                        ) => Some(ActiveStage {
-                            pipe,
-                            start_day: *start_day,
-                            t0_mean: *t0_mean,
-                            water_temp_c: self.stages[i].water_temp_c,
-                        }),
-                        _ => None,
-                    }
-                });
-                if stage.is_some() {
-                    self.stats.pipe_terms += 1;
-                }
-                let inc = lift_increment(
-                    &LiftSourceInput {
-                        pour_day,
-                        rise: self.rise.as_ref(),
-                        stage,
-                    },
-                    t0,
-                    t1,
-                );
-                if inc.total == 0.0 && inc.hydration == 0.0 {
-                    continue;
-                }
-                for &e in &self.lift_elems[&(block, lift)] {
-                    let caps = &self.data.cap_lumped[e as usize];
-                    for (k, &d) in self.data.dofs[e as usize].iter().enumerate() {
-                        q[sys.index_of[d as usize] as usize] += caps[k] * inc.total;
-                    }
-                    let c: f64 = caps.iter().sum();
-                    hyd_heat += c * inc.hydration;
-                    pipe_heat += c * (inc.total - inc.hydration);
-                }
+                let c: f64 = caps.iter().sum();
+                out.hydration += c * inc.hydration;
+                out.pipes += c * (inc.total - inc.hydration);
             }
         }
+        out
+    }
 
+    /// The step's right-hand side b = C T0 − (1−θ)Δt KH T0 + Δt f_θ + Q, and
+    /// the same with the prescribed temperatures moved to the right (what is
+    /// solved).
+    fn right_hand_side(
+        &self,
+        t0: f64,
+        t1: f64,
+        q: &[f64],
+        fixed_value: &[f64],
+    ) -> (StepRhs, Vec<f64>) {
+        let (sys, theta, dt) = (&self.sys, self.settings.theta, t1 - t0);
+        let n = sys.n();
         // Air temperature weighted by θ over the step.
         let ta = self
             .air
             .as_ref()
             .map(|a| theta * a.at(t1) + (1.0 - theta) * a.at(t0))
             .unwrap_or(0.0);
-
         let t_old: Vec<f64> = sys
             .dofs
             .iter()
             .map(|&d| self.state.temperature[d as usize])
             .collect();
-        // b = C T0 − (1−θ)Δt KH T0 + Δt f_θ + Q
         let mut b = vec![0.0; n];
         sys.cap_mul(&t_old, &mut b);
         let mut kh_t = vec![0.0; n];
@@ -592,116 +621,117 @@ impl ThermalModel {
         for i in 0..n {
             b[i] += -(1.0 - theta) * dt * kh_t[i] + dt * ta * sys.air_load[i] + q[i];
         }
-        let b_full = b.clone();
-        // Move prescribed values to the right-hand side: b_free −= A_{free,fixed} x_fixed.
+        let full = b.clone();
         if sys.fixed.iter().any(|&f| f) {
-            let xf: Vec<f64> = (0..n)
-                .map(|i| if sys.fixed[i] { fixed_value[i] } else { 0.0 })
-                .collect();
-            let mut y = vec![0.0; n];
-            let mut ky = vec![0.0; n];
-            sys.cap_mul(&xf, &mut y);
-            sys.kh.mul_vec(&xf, &mut ky);
-            for i in 0..n {
-                if sys.fixed[i] {
-                    b[i] = fixed_value[i];
-                } else {
-                    b[i] -= y[i] + theta * dt * ky[i];
-                }
-            }
+            move_prescribed(sys, theta * dt, fixed_value, &mut b);
         }
-
-        let x = match self.solver.thermal {
-            ThermalSolverKind::Cholesky => {
-                let sys = self.sys.as_mut().expect("built");
-                let t = Instant::now();
-                let (factor, fresh) =
-                    sys.factor(dt, theta)
-                        .map_err(|source| ThermalError::Solve {
-                            day: t1,
-                            dt,
-                            source,
-                        })?;
-                if fresh {
-                    self.stats.numeric += 1;
-                    self.stats.seconds_numeric += t.elapsed().as_secs_f64();
-                }
-                let mut x = b;
-                let t_solve = Instant::now();
-                factor
-                    .solve_in_place(&mut x)
-                    .map_err(|source| ThermalError::Solve {
-                        day: t1,
-                        dt,
-                        source,
-                    })?;
-                self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
-                x
-            }
-            ThermalSolverKind::Pcg => {
-                let sys = self.sys.as_ref().expect("built");
-                let t_solve = Instant::now();
-                // Start from the old temperatures; prescribed values are exact already.
-                let mut x: Vec<f64> = (0..n)
-                    .map(|i| if sys.fixed[i] { b[i] } else { t_old[i] })
-                    .collect();
-                let max = self.solver.pcg_max_iterations as usize;
-                let iterations = sys
-                    .solve_pcg(dt, theta, &b, &mut x, self.solver.pcg_tolerance, max)
-                    .map_err(|residual| ThermalError::NotConverged {
-                        day: t1,
-                        dt,
-                        iterations: max,
-                        residual,
-                    })?;
-                self.stats.pcg_iterations += iterations;
-                self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
-                x
-            }
+        let rhs = StepRhs {
+            ta,
+            t_old,
+            kh_t,
+            full,
         };
-        if x.iter().any(|v| !v.is_finite()) {
-            return Err(ThermalError::NonFinite { day: t1 });
-        }
+        (rhs, b)
+    }
 
+    /// Solves by the cached Cholesky factor of this step length (factorised
+    /// now if new).
+    fn solve_direct(
+        &mut self,
+        mut x: Vec<f64>,
+        day: f64,
+        dt: f64,
+    ) -> Result<Vec<f64>, ThermalError> {
+        let t = Instant::now();
+        let (factor, fresh) = self
+            .sys
+            .factor(dt, self.settings.theta)
+            .map_err(|source| ThermalError::Solve { day, dt, source })?;
+        if fresh {
+            self.stats.numeric += 1;
+            self.stats.seconds_numeric += t.elapsed().as_secs_f64();
+        }
+        let t_solve = Instant::now();
+        factor
+            .solve_in_place(&mut x)
+            .map_err(|source| ThermalError::Solve { day, dt, source })?;
+        self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+        Ok(x)
+    }
+
+    /// Solves by conjugate gradients from the old temperatures.
+    fn solve_pcg(
+        &mut self,
+        b: &[f64],
+        t_old: &[f64],
+        day: f64,
+        dt: f64,
+    ) -> Result<Vec<f64>, ThermalError> {
+        let sys = &self.sys;
+        let t_solve = Instant::now();
+        // Start from the old temperatures; prescribed values are exact already.
+        let mut x: Vec<f64> = (0..sys.n())
+            .map(|i| if sys.fixed[i] { b[i] } else { t_old[i] })
+            .collect();
+        let max = self.settings.pcg_max_iterations;
+        let tolerance = self.settings.pcg_tolerance;
+        let iterations = sys
+            .solve_pcg(dt, self.settings.theta, b, &mut x, tolerance, max)
+            .map_err(|residual| ThermalError::NotConverged {
+                day,
+                dt,
+                iterations: max,
+                residual,
+            })?;
+        self.stats.pcg_iterations += iterations;
+        self.stats.seconds_solve += t_solve.elapsed().as_secs_f64();
+        Ok(x)
+    }
+
+    /// Checks the solution `x` against the unmodified equations and returns
+    /// the heat gained from the air and from the water over the step [J]
+    /// (the water's from the reactions of the fixed rows).
+    fn boundary_heat(
+        &self,
+        rhs: &StepRhs,
+        x: &[f64],
+        day: f64,
+        dt: f64,
+    ) -> Result<(f64, f64), ThermalError> {
+        let (sys, theta) = (&self.sys, self.settings.theta);
+        let n = sys.n();
         // Residual of the unmodified equations on free rows; reactions on fixed rows:
         // r = C T1 + θΔt KH T1 − b_full, where b_full = C T0 − (1−θ)Δt KH T0 + Δt f_θ + Q.
-        let sys = self.sys.as_ref().expect("built");
         let mut c_new = vec![0.0; n];
-        sys.cap_mul(&x, &mut c_new);
+        sys.cap_mul(x, &mut c_new);
         let mut kh_new = vec![0.0; n];
-        sys.kh.mul_vec(&x, &mut kh_new);
+        sys.kh.mul_vec(x, &mut kh_new);
         let (mut res2, mut ref2, mut water_heat) = (0.0, 0.0, 0.0);
         for i in 0..n {
-            let r = c_new[i] + theta * dt * kh_new[i] - b_full[i];
+            let r = c_new[i] + theta * dt * kh_new[i] - rhs.full[i];
             if sys.fixed[i] {
                 water_heat += r;
             } else {
                 res2 += r * r;
-                ref2 += b_full[i] * b_full[i] + c_new[i] * c_new[i];
+                ref2 += rhs.full[i] * rhs.full[i] + c_new[i] * c_new[i];
             }
         }
         let residual = (res2 / ref2.max(f64::MIN_POSITIVE)).sqrt();
         if residual > RESIDUAL_TOLERANCE {
-            return Err(ThermalError::Residual { day: t1, residual });
+            return Err(ThermalError::Residual { day, residual });
         }
         // Air heat = Δt Σ (f_θ − H T_θ); Σ_i (KH T_θ)_i = Σ_i (H T_θ)_i because K
         // annihilates constants (K is symmetric with zero row sums).
         let kh_theta_sum: f64 = (0..n)
-            .map(|i| theta * kh_new[i] + (1.0 - theta) * kh_t[i])
+            .map(|i| theta * kh_new[i] + (1.0 - theta) * rhs.kh_t[i])
             .sum();
-        let air_heat = dt * ta * sys.air_load.iter().sum::<f64>() - dt * kh_theta_sum;
+        let air_heat = dt * rhs.ta * sys.air_load.iter().sum::<f64>() - dt * kh_theta_sum;
+        Ok((air_heat, water_heat))
+    }
 
-        for (i, &d) in sys.dofs.iter().enumerate() {
-            self.state.temperature[d as usize] = x[i];
-        }
-        let ledger = &mut self.state.ledger;
-        ledger.hydration += hyd_heat;
-        ledger.pipes += pipe_heat;
-        ledger.air += air_heat;
-        ledger.water += water_heat;
-        self.stats.steps += 1;
-
-        // Stages whose region has fallen to its target end now.
+    /// Ends the stages whose region has fallen to its target by `day`; arms
+    /// those whose region is above it.
+    fn end_stages_at_target(&mut self, day: f64) {
         for i in 0..self.stages.len() {
             let (StageStatus::Active { armed, .. }, Some(target)) =
                 (self.state.status[i].clone(), self.stages[i].target_temp_c)
@@ -710,14 +740,13 @@ impl ThermalModel {
             };
             let mean = self.region_mean(i);
             if armed && mean <= target {
-                self.end_stage(i, t1, true);
+                self.end_stage(i, day, true);
             } else if !armed && mean > target {
                 if let StageStatus::Active { armed, .. } = &mut self.state.status[i] {
                     *armed = true;
                 }
             }
         }
-        Ok(())
     }
 
     /// Stored heat Σ c_i T_i of the live dofs [J].
@@ -731,7 +760,7 @@ impl ThermalModel {
     /// Temperature at a zone point (bilinear on the joint face), if its nodes are live.
     pub fn point_temperature(&self, mesh: &Mesh, p: &ZoneSite) -> Option<f64> {
         let pair = &mesh.face_pairs[p.pair as usize];
-        let sys = self.sys.as_ref()?;
+        let sys = &self.sys;
         let n = crate::mesh::quad_shape(p.s, p.t);
         let mut value = 0.0;
         for (k, &node) in pair.nodes_a.iter().enumerate() {
@@ -760,6 +789,50 @@ impl ThermalModel {
     }
 
     pub fn has_pipes(&self) -> bool {
-        self.pipe.is_some()
+        self.settings.pipe.is_some()
+    }
+}
+
+/// Heat released in a step by hydration and pipe cooling.
+struct StepSources {
+    /// per live dof [J]
+    q: Vec<f64>,
+    /// hydration heat of the step [J]
+    hydration: f64,
+    /// heat the pipes took out (negative) [J]
+    pipes: f64,
+    /// lifts whose source had a running stage
+    pipe_terms: usize,
+}
+
+/// What the heat balance needs of a step's right-hand side.
+struct StepRhs {
+    /// air temperature weighted by θ over the step [°C]
+    ta: f64,
+    /// temperatures at t0, per live dof [°C]
+    t_old: Vec<f64>,
+    /// KH T0 (zero when θ = 1)
+    kh_t: Vec<f64>,
+    /// C T0 − (1−θ)Δt KH T0 + Δt f_θ + Q, the prescribed rows included
+    full: Vec<f64>,
+}
+
+/// Moves prescribed values to the right-hand side, b_free −= A_{free,fixed}
+/// x_fixed with A = C + θΔt KH, and makes the fixed rows read their value.
+fn move_prescribed(sys: &LiveSystem, theta_dt: f64, fixed_value: &[f64], b: &mut [f64]) {
+    let n = sys.n();
+    let xf: Vec<f64> = (0..n)
+        .map(|i| if sys.fixed[i] { fixed_value[i] } else { 0.0 })
+        .collect();
+    let mut y = vec![0.0; n];
+    let mut ky = vec![0.0; n];
+    sys.cap_mul(&xf, &mut y);
+    sys.kh.mul_vec(&xf, &mut ky);
+    for i in 0..n {
+        if sys.fixed[i] {
+            b[i] = fixed_value[i];
+        } else {
+            b[i] -= y[i] + theta_dt * ky[i];
+        }
     }
 }

@@ -40,7 +40,7 @@ use common::*;
 use groutready::fem::elasticity::{element_dofs, gauss_points, internal_force};
 use groutready::mechanics::joints::PointState;
 use groutready::mechanics::model::GRAVITY;
-use groutready::mechanics::{MechanicsModel, Supports};
+use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::{Mesh, Part};
 use groutready::scene::{ContactSolverKind, Scene};
 
@@ -192,7 +192,8 @@ fn slide(solver: ContactSolverKind, mu_s: f64, mu_k: f64, ratios: &[f64]) -> Vec
     for &n in block_nodes(&mesh, 1).iter().chain(&far) {
         fixed.extend((0..3).map(|c| (n, c)));
     }
-    let mut m = MechanicsModel::new(&mesh, &sc, &Supports { fixed }).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
     assert_eq!(m.points.len(), 9, "3 × 3 joint points");
     for p in &m.points {
         assert_eq!(
@@ -434,7 +435,8 @@ fn incline(solver: ContactSolverKind, hold: HoldY, push: &[f64]) -> (Vec<Incline
     if hold == HoldY::Joint {
         fixed.extend(b_nodes.iter().map(|&n| (n, 1)));
     }
-    let mut m = MechanicsModel::new(&mesh, &sc, &Supports { fixed }).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
     assert_eq!(m.points.len(), 12, "3 × 4 joint points");
     for p in &m.points {
         let f = &p.frame;

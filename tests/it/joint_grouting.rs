@@ -18,7 +18,7 @@ use crate::common;
 
 use common::*;
 use groutready::mechanics::joints::PointState;
-use groutready::mechanics::MechanicsModel;
+use groutready::mechanics::{MechanicsModel, MechanicsSettings};
 use groutready::mesh::Mesh;
 use groutready::scene::{ContactSolverKind, Scene};
 
@@ -50,7 +50,8 @@ fn two_blocks(mu: f64, gap0: f64, contact: ContactSolverKind) -> (Scene, Mesh) {
 /// Pours both blocks on day 0 at 20 °C and grouts the (closed) joint on day 1.
 fn grouted(contact: ContactSolverKind) -> (MechanicsModel, Mesh) {
     let (sc, mesh) = two_blocks(0.0, 0.0, contact);
-    let mut m = MechanicsModel::new(&mesh, &sc, &walls_frictionless_base(&mesh)).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);
     let t = vec![20.0; mesh.n_thermal_dofs];
@@ -171,7 +172,8 @@ fn seasons(scale_len: f64, scale_stress: f64) -> (Vec<f64>, usize, Vec<usize>) {
     let law = sc.concrete.modulus.as_mut().unwrap();
     law.e0_pa *= scale_stress;
     sc.joints.initial_gap_m *= scale_len;
-    let mut m = MechanicsModel::new(&mesh, &sc, &walls_frictionless_base(&mesh)).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);
     let temp = |k: usize| 20.0 + 8.0 * (2.0 * std::f64::consts::PI * k as f64 / 12.0).sin();

@@ -6,7 +6,7 @@ use crate::common;
 
 use common::*;
 use groutready::mechanics::joints::PointState;
-use groutready::mechanics::MechanicsModel;
+use groutready::mechanics::{MechanicsModel, MechanicsSettings};
 use groutready::mesh::Mesh;
 
 const E: f64 = 3.0e10;
@@ -25,7 +25,8 @@ fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
     let j: toml::Table = toml::from_str(&joints).unwrap();
     sc.joints = j["joints"].clone().try_into().unwrap();
     let mesh = blocks_mesh(&sc);
-    let mut m = MechanicsModel::new(&mesh, &sc, &walls_frictionless_base(&mesh)).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);
     let t0 = vec![20.0; mesh.n_thermal_dofs];

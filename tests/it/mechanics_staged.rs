@@ -4,10 +4,10 @@ use crate::common;
 
 use common::*;
 use groutready::material::AdiabaticRise;
-use groutready::mechanics::{MechanicsModel, Supports};
+use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::Mesh;
 use groutready::thermal::boundary::AirTemperature;
-use groutready::thermal::ThermalModel;
+use groutready::thermal::{ThermalModel, ThermalSettings};
 
 const MECH: &str =
     "modulus = { e0_pa = 3.0e10, a = 0.40, b = 0.34 }\npoisson = 0.2\nexpansion_per_c = 1.0e-5\n";
@@ -54,9 +54,11 @@ fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
     );
     let mesh = blocks_mesh(&sc);
     let air = AirTemperature::new(sc.epoch, sc.air.clone().unwrap(), None);
-    let mut th = ThermalModel::new(&mesh, &sc, vec![], Some(air), None).unwrap();
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![], Some(air), None).unwrap();
     // Fully restrained: any spurious thermal strain would show as stress.
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, true)).unwrap();
     let mut t = 0.0;
     for lift in 1..=3 {
         th.pour(1, lift, t, 27.0);
@@ -92,7 +94,8 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
         "",
     );
     let mesh = blocks_mesh(&sc);
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, false)).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, false)).unwrap();
     let mut t = 0.0;
     for lift in 1..=5 {
         m.pour(1, lift, t);
@@ -139,8 +142,10 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
     };
     sc.concrete.adiabatic = Some(rise.clone());
     let mesh = blocks_mesh(&sc);
-    let mut th = ThermalModel::new(&mesh, &sc, vec![], None, None).unwrap();
-    let mut m = MechanicsModel::new(&mesh, &sc, &rollers(&mesh, true, true, true)).unwrap();
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![], None, None).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, true)).unwrap();
     th.pour(1, 1, 0.0, 15.0);
     m.pour(1, 1, 0.0);
     let n = (days / dt).round() as usize;

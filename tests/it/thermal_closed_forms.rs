@@ -9,7 +9,7 @@ use groutready::schedule::{CoolingStage, Pour, Schedules, Stage};
 use groutready::sim::Simulation;
 use groutready::thermal::boundary::AirTemperature;
 use groutready::thermal::cooling::{PlannedStage, StageStatus};
-use groutready::thermal::ThermalModel;
+use groutready::thermal::{ThermalModel, ThermalSettings};
 
 const PIPES: &str = r#"
 [pipes]
@@ -59,7 +59,8 @@ fn insulated_block_follows_each_adiabatic_curve() {
         let mut sc = scene("\"hydration\"", &blocks_geometry(1, 6.0, 4.0, 1, 2, 2), "");
         sc.concrete.adiabatic = Some(rise.clone());
         let mesh = blocks_mesh(&sc);
-        let mut th = ThermalModel::new(&mesh, &sc, vec![], None, None).unwrap();
+        let thermal = ThermalSettings::from_scene(&sc);
+        let mut th = ThermalModel::new(&mesh, &thermal, vec![], None, None).unwrap();
         th.pour(1, 1, 0.0, 14.0);
         for (t0, t1) in steps_to(90.0) {
             th.step(t0, t1).unwrap();
@@ -117,7 +118,8 @@ fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
         sc.concrete_diffusivity_m2_per_day(),
         sc.concrete.conductivity_w_mk,
     );
-    let mut th = ThermalModel::new(&mesh, &sc, stages, None, None).unwrap();
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, stages, None, None).unwrap();
     let t_place = 16.0;
     th.pour(1, 1, 0.0, t_place);
     th.update_stages(0.0);
@@ -179,7 +181,8 @@ fn a_stage_ends_when_its_target_is_reached() {
         target_temp_c: Some(30.0),
         line: 2,
     };
-    let mut th = ThermalModel::new(&mesh, &sc, vec![stage], None, None).unwrap();
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![stage], None, None).unwrap();
     th.pour(1, 1, 0.0, 15.0);
     let mut t = 0.0;
     let mut ended = None;
@@ -255,7 +258,8 @@ fn slab_fe(n_elem: u32, dt_fo: f64, theta: f64, fos: &[f64]) -> Vec<f64> {
         .unwrap();
     let a = sc.concrete_diffusivity_m2_per_day(); // L = 1 m so Fo = a t
     let air = AirTemperature::new(sc.epoch, sc.air.clone().unwrap(), None);
-    let mut th = ThermalModel::new(&mesh, &sc, vec![], Some(air), None).unwrap();
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![], Some(air), None).unwrap();
     th.pour(1, 1, 0.0, 1.0);
     let mut out = vec![];
     let mut fo = 0.0;
