@@ -761,7 +761,7 @@ impl MechanicsModel {
     /// None until both blocks exist there.
     pub fn point_aperture(&self, mesh: &Mesh, zp: &ZonePoint) -> Option<(f64, &'static str)> {
         let pair = &mesh.face_pairs[zp.pair as usize];
-        let n = crate::mesh::quad_shape(zp.s, zp.t);
+        let n = crate::fem::quad4::shape([zp.s, zp.t]);
         let (mut value, mut label, mut best) = (0.0, "stick", -1.0);
         for k in 0..4 {
             if pair.nodes_a[k] == pair.nodes_b[k] {

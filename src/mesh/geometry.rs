@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::MeshError;
+
 /// Which generator builds the mesh.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -114,4 +116,32 @@ fn two_f() -> f64 {
 }
 fn min_block_fraction() -> f64 {
     0.3
+}
+
+/// `Err` naming `name` unless `ok`; the message is built only then.
+pub(crate) fn check(ok: bool, name: &str, msg: impl FnOnce() -> String) -> Result<(), MeshError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(MeshError::param(name, msg()))
+    }
+}
+
+/// `name must be > 0, got v` unless v is finite and positive.
+pub(crate) fn positive(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v > 0.0, name, || {
+        format!("must be > 0, got {v}")
+    })
+}
+
+/// `name must be >= 0, got v` unless v is finite and not negative.
+pub(crate) fn non_negative(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v >= 0.0, name, || {
+        format!("must be >= 0, got {v}")
+    })
+}
+
+/// `name must be >= min, got v` for a count below `min`.
+pub(crate) fn at_least(name: &str, v: u32, min: u32) -> Result<(), MeshError> {
+    check(v >= min, name, || format!("must be >= {min}, got {v}"))
 }
