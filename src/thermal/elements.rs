@@ -8,7 +8,7 @@ use crate::fem::hex8::FACES;
 use crate::fem::thermal_kernels;
 use crate::fem::ElementError;
 use crate::mesh::{Mesh, Part};
-use crate::scene::Scene;
+use crate::scene::{Scene, ThermalProperties};
 
 type Mat8 = SMatrix<f64, 8, 8>;
 
