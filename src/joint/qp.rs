@@ -409,9 +409,9 @@ impl FixedPoint {
                 .collect();
             let mut diff = 0.0f64;
             let mut size = 0.0f64;
-            for i in 0..n {
-                diff = diff.max((target[i] - self.s[i]).abs());
-                size = size.max(target[i]);
+            for (&t, &si) in target.iter().zip(&self.s) {
+                diff = diff.max((t - si).abs());
+                size = size.max(t);
             }
             let change = diff / (size + 1.0);
             let states = sc.classify(&rt, &ut, &self.s);
@@ -428,8 +428,8 @@ impl FixedPoint {
                     self.s[i] = self.mu[i] * rt[sc.points[i].n].max(0.0);
                 }
             } else {
-                for i in 0..n {
-                    self.s[i] += settings.relaxation * (target[i] - self.s[i]);
+                for (si, &t) in self.s.iter_mut().zip(&target) {
+                    *si += settings.relaxation * (t - *si);
                 }
             }
             if self.counters.iteration >= settings.max_fixed_point {

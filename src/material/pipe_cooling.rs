@@ -684,14 +684,14 @@ impl Integrand {
         (-self.y0 - eta - self.p_v_s(eta, delta)).exp()
     }
 
-    fn from_eta(&self, eta: f64) -> Point {
+    fn at_eta(&self, eta: f64) -> Point {
         Point {
             eta,
             delta: self.big_y - eta,
         }
     }
 
-    fn from_delta(&self, delta: f64) -> Point {
+    fn at_delta(&self, delta: f64) -> Point {
         Point {
             eta: self.big_y - delta,
             delta,
@@ -742,7 +742,7 @@ impl Integrand {
         // Uniform in η: bounds the change of e^{−η}.
         let mut eta = start.eta + PANEL_VAR;
         while eta < end.eta {
-            pts.push(self.from_eta(eta));
+            pts.push(self.at_eta(eta));
             eta += PANEL_VAR;
         }
         // Uniform in pV^s: bounds the change of φ.
@@ -751,7 +751,7 @@ impl Integrand {
         if p > 0.0 {
             let mut level = (level_hi / PANEL_VAR).floor() * PANEL_VAR + PANEL_VAR;
             while level < level_lo {
-                pts.push(self.from_delta(self.map.delta(self.v_of_level(level))));
+                pts.push(self.at_delta(self.map.delta(self.v_of_level(level))));
                 level += PANEL_VAR;
             }
         }
@@ -798,7 +798,7 @@ impl Integrand {
         kept.push(end);
         if kept.len() == 2 && left_singular && right_singular {
             // One panel cannot carry both substitutions.
-            kept.insert(1, self.from_eta(0.5 * (start.eta + end.eta)));
+            kept.insert(1, self.at_eta(0.5 * (start.eta + end.eta)));
         }
         Panels {
             kept,
@@ -824,7 +824,7 @@ impl Integrand {
         }
         let mut d = d_end;
         while d > 0.0 && d < delta_lo {
-            pts.push(self.from_delta(d));
+            pts.push(self.at_delta(d));
             d *= GRADE;
         }
         d_end
@@ -855,7 +855,7 @@ impl Integrand {
         // Distance from the branch point is y = y0 + η.
         let mut y = y0 + e_end;
         while y > 0.0 && y - y0 < eta_hi {
-            pts.push(self.from_eta(y - y0));
+            pts.push(self.at_eta(y - y0));
             y *= GRADE;
         }
         (left_singular, e_end)
