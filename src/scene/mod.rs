@@ -259,7 +259,7 @@ pub struct Rock {
     /// Initial temperature gradient, positive = warmer with depth [°C/m], default 0.
     #[serde(default)]
     pub gradient_c_per_m: f64,
-    /// Elastic modulus of the rock [Pa]; required by any mechanical effect when the mesh has rock.
+    /// Elastic modulus of the rock \[Pa\]; required by any mechanical effect when the mesh has rock.
     #[serde(default)]
     pub modulus_pa: Option<f64>,
     /// Poisson's ratio of the rock.
