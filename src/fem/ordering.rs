@@ -29,36 +29,7 @@ pub enum Ordering {
 pub fn nested_dissection(pattern: &Pattern, dof_coords: &[[f64; 3]], leaf_size: usize) -> Vec<u32> {
     let n = pattern.n_dofs();
     assert_eq!(dof_coords.len(), n, "one coordinate per dof");
-    // full adjacency (without the diagonal) from the upper triangle
-    let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-    let mut deg = vec![0usize; n + 1];
-    for j in 0..n {
-        for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
-            if i as usize != j {
-                deg[i as usize + 1] += 1;
-                deg[j + 1] += 1;
-            }
-        }
-    }
-    for i in 0..n {
-        deg[i + 1] += deg[i];
-    }
-    let adj_ptr = deg;
-    let mut fill = adj_ptr.clone();
-    let mut adj = vec![0u32; adj_ptr[n]];
-    for j in 0..n {
-        for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
-            let i = i as usize;
-            if i != j {
-                adj[fill[i]] = j as u32;
-                fill[i] += 1;
-                adj[fill[j]] = i as u32;
-                fill[j] += 1;
-            }
-        }
-    }
-    drop(fill);
-
+    let graph = Graph::of(pattern);
     let mut order = Vec::with_capacity(n);
     // side[v]: 0 = not in the current subset, 1 = side A, 2 = side B
     let mut side = vec![0u8; n];
@@ -81,70 +52,133 @@ pub fn nested_dissection(pattern: &Pattern, dof_coords: &[[f64; 3]], leaf_size: 
             order.extend_from_slice(&set);
             continue;
         }
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for &v in &set {
-            for k in 0..3 {
-                lo[k] = lo[k].min(dof_coords[v as usize][k]);
-                hi[k] = hi[k].max(dof_coords[v as usize][k]);
-            }
-        }
-        let axis = (0..3)
-            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
-            .unwrap_or(0);
-        let mut keys: Vec<f64> = set.iter().map(|&v| dof_coords[v as usize][axis]).collect();
-        let mid = keys.len() / 2;
-        let (_, &mut median, _) = keys.select_nth_unstable_by(mid, f64::total_cmp);
-        let (mut a, mut b): (Vec<u32>, Vec<u32>) = set
-            .iter()
-            .partition(|&&v| dof_coords[v as usize][axis] < median);
-        if a.is_empty() || b.is_empty() {
+        match bisect(&set, dof_coords, &graph, &mut side) {
             // all coordinates equal along the longest axis: no geometric split
-            order.extend_from_slice(&set);
-            continue;
-        }
-        for &v in &a {
-            side[v as usize] = 1;
-        }
-        for &v in &b {
-            side[v as usize] = 2;
-        }
-        // separator: the smaller of the two one-sided boundaries
-        let boundary = |part: &[u32], other: u8, side: &[u8]| -> Vec<bool> {
-            part.iter()
-                .map(|&v| {
-                    adj[adj_ptr[v as usize]..adj_ptr[v as usize + 1]]
-                        .iter()
-                        .any(|&w| side[w as usize] == other)
-                })
-                .collect()
-        };
-        let in_sep_b = boundary(&b, 1, &side);
-        let in_sep_a = boundary(&a, 2, &side);
-        let nb = in_sep_b.iter().filter(|&&x| x).count();
-        let na = in_sep_a.iter().filter(|&&x| x).count();
-        let mut sep = Vec::new();
-        let (part, mask) = if nb <= na {
-            (&mut b, in_sep_b)
-        } else {
-            (&mut a, in_sep_a)
-        };
-        let mut k = 0;
-        part.retain(|&v| {
-            let s = mask[k];
-            k += 1;
-            if s {
-                sep.push(v);
+            None => order.extend_from_slice(&set),
+            Some((a, b, sep)) => {
+                // popped in reverse: A, then B, then the separator
+                stack.push(Task::Emit(sep));
+                stack.push(Task::Split(b));
+                stack.push(Task::Split(a));
             }
-            !s
-        });
-        for &v in &set {
-            side[v as usize] = 0;
         }
-        // popped in reverse: A, then B, then the separator
-        stack.push(Task::Emit(sep));
-        stack.push(Task::Split(b));
-        stack.push(Task::Split(a));
     }
     debug_assert_eq!(order.len(), n);
     order
+}
+
+/// The full adjacency (without the diagonal) of a pattern's upper triangle:
+/// the neighbours of v are `adj[ptr[v]..ptr[v + 1]]`.
+struct Graph {
+    ptr: Vec<usize>,
+    adj: Vec<u32>,
+}
+
+impl Graph {
+    fn of(pattern: &Pattern) -> Graph {
+        let n = pattern.n_dofs();
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let mut deg = vec![0usize; n + 1];
+        for j in 0..n {
+            for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
+                if i as usize != j {
+                    deg[i as usize + 1] += 1;
+                    deg[j + 1] += 1;
+                }
+            }
+        }
+        for i in 0..n {
+            deg[i + 1] += deg[i];
+        }
+        let ptr = deg;
+        let mut fill = ptr.clone();
+        let mut adj = vec![0u32; ptr[n]];
+        for j in 0..n {
+            for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
+                let i = i as usize;
+                if i != j {
+                    adj[fill[i]] = j as u32;
+                    fill[i] += 1;
+                    adj[fill[j]] = i as u32;
+                    fill[j] += 1;
+                }
+            }
+        }
+        Graph { ptr, adj }
+    }
+
+    fn neighbours(&self, v: u32) -> &[u32] {
+        &self.adj[self.ptr[v as usize]..self.ptr[v as usize + 1]]
+    }
+}
+
+/// Split `set` by the plane through the median of its longest extent into
+/// (A, B, separator): the separator is the smaller of the two one-sided
+/// boundaries, taken out of its side. `None` when every point has the same
+/// coordinate along that axis. `side` is all 0 on entry and on return.
+fn bisect(
+    set: &[u32],
+    coords: &[[f64; 3]],
+    graph: &Graph,
+    side: &mut [u8],
+) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &v in set {
+        for k in 0..3 {
+            lo[k] = lo[k].min(coords[v as usize][k]);
+            hi[k] = hi[k].max(coords[v as usize][k]);
+        }
+    }
+    let axis = (0..3)
+        .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+        .unwrap_or(0);
+    let mut keys: Vec<f64> = set.iter().map(|&v| coords[v as usize][axis]).collect();
+    let mid = keys.len() / 2;
+    let (_, &mut median, _) = keys.select_nth_unstable_by(mid, f64::total_cmp);
+    let (mut a, mut b): (Vec<u32>, Vec<u32>) = set
+        .iter()
+        .partition(|&&v| coords[v as usize][axis] < median);
+    if a.is_empty() || b.is_empty() {
+        return None;
+    }
+    for &v in &a {
+        side[v as usize] = 1;
+    }
+    for &v in &b {
+        side[v as usize] = 2;
+    }
+    // separator: the smaller of the two one-sided boundaries
+    let boundary = |part: &[u32], other: u8, side: &[u8]| -> Vec<bool> {
+        part.iter()
+            .map(|&v| {
+                graph
+                    .neighbours(v)
+                    .iter()
+                    .any(|&w| side[w as usize] == other)
+            })
+            .collect()
+    };
+    let in_sep_b = boundary(&b, 1, side);
+    let in_sep_a = boundary(&a, 2, side);
+    let nb = in_sep_b.iter().filter(|&&x| x).count();
+    let na = in_sep_a.iter().filter(|&&x| x).count();
+    let mut sep = Vec::new();
+    let (part, mask) = if nb <= na {
+        (&mut b, in_sep_b)
+    } else {
+        (&mut a, in_sep_a)
+    };
+    let mut k = 0;
+    part.retain(|&v| {
+        let s = mask[k];
+        k += 1;
+        if s {
+            sep.push(v);
+        }
+        !s
+    });
+    for &v in set {
+        side[v as usize] = 0;
+    }
+    Some((a, b, sep))
 }

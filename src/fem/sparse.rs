@@ -63,22 +63,24 @@ pub struct Pattern {
     scatter: Vec<u32>,
 }
 
-impl Pattern {
-    /// Builds the pattern of the union of `elements` (each a list of dof
-    /// indices, any length). Element `k` of the list is "slot" `k` for
-    /// [`SparseSym::add_element`].
-    pub fn try_new<E: AsRef<[u32]>>(n_dofs: usize, elements: &[E]) -> Result<Self, PatternError> {
-        if n_dofs >= u32::MAX as usize {
-            return Err(PatternError::TooManyDofs { n_dofs });
-        }
-        let n = n_dofs;
-        // element dofs, flattened
-        let mut elem_dof_ptr = Vec::with_capacity(elements.len() + 1);
+/// The element dof lists, flattened: slot `e` owns `dofs[ptr[e]..ptr[e + 1]]`
+/// and `scatter_ptr[e]..scatter_ptr[e + 1]` of the scatter map (one entry
+/// per local pair a ≤ b).
+struct FlatElements {
+    ptr: Vec<usize>,
+    dofs: Vec<u32>,
+    scatter_ptr: Vec<usize>,
+}
+
+impl FlatElements {
+    /// Checks every dof against `n` (or [`NO_DOF`]) while copying.
+    fn new<E: AsRef<[u32]>>(n: usize, elements: &[E]) -> Result<Self, PatternError> {
+        let mut ptr = Vec::with_capacity(elements.len() + 1);
         let mut scatter_ptr = Vec::with_capacity(elements.len() + 1);
-        elem_dof_ptr.push(0);
+        ptr.push(0);
         scatter_ptr.push(0);
         let total: usize = elements.iter().map(|e| e.as_ref().len()).sum();
-        let mut elem_dofs = Vec::with_capacity(total);
+        let mut dofs = Vec::with_capacity(total);
         for (slot, e) in elements.iter().enumerate() {
             let e = e.as_ref();
             for &d in e {
@@ -90,24 +92,41 @@ impl Pattern {
                     });
                 }
             }
-            elem_dofs.extend_from_slice(e);
-            elem_dof_ptr.push(elem_dofs.len());
+            dofs.extend_from_slice(e);
+            ptr.push(dofs.len());
             let ne = e.len();
             scatter_ptr.push(scatter_ptr[slot] + ne * (ne + 1) / 2);
         }
-        let n_elem = elements.len();
+        Ok(FlatElements {
+            ptr,
+            dofs,
+            scatter_ptr,
+        })
+    }
 
-        // dof → incident elements (each element listed once per dof)
+    fn len(&self) -> usize {
+        self.ptr.len() - 1
+    }
+
+    fn dofs(&self, e: usize) -> &[u32] {
+        &self.dofs[self.ptr[e]..self.ptr[e + 1]]
+    }
+
+    /// The dofs of element `e` in the system, each once.
+    fn unique_dofs(&self, e: usize) -> impl Iterator<Item = usize> + '_ {
+        let d = self.dofs(e);
+        d.iter()
+            .enumerate()
+            .filter(move |&(k, &x)| x != NO_DOF && !d[..k].contains(&x))
+            .map(|(_, &x)| x as usize)
+    }
+
+    /// dof → incident elements (each element listed once per dof), as
+    /// `inc[inc_ptr[d]..inc_ptr[d + 1]]`.
+    fn incidence(&self, n: usize) -> (Vec<usize>, Vec<u32>) {
         let mut inc_ptr = vec![0usize; n + 1];
-        let unique_dofs = |e: usize| {
-            let d = &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]];
-            d.iter()
-                .enumerate()
-                .filter(move |&(k, &x)| x != NO_DOF && !d[..k].contains(&x))
-                .map(|(_, &x)| x as usize)
-        };
-        for e in 0..n_elem {
-            for d in unique_dofs(e) {
+        for e in 0..self.len() {
+            for d in self.unique_dofs(e) {
                 inc_ptr[d + 1] += 1;
             }
         }
@@ -116,20 +135,39 @@ impl Pattern {
         }
         let mut fill = inc_ptr.clone();
         let mut inc = vec![0u32; inc_ptr[n]];
-        for e in 0..n_elem {
-            for d in unique_dofs(e) {
+        for e in 0..self.len() {
+            for d in self.unique_dofs(e) {
                 inc[fill[d]] = e as u32;
                 fill[d] += 1;
             }
         }
-        drop(fill);
+        (inc_ptr, inc)
+    }
+}
 
-        // column by column: rows ≤ j, then the scatter entries of column j
+/// The upper triangle in CSC form and the scatter map of every element.
+struct Columns {
+    col_ptr: Vec<u32>,
+    row_idx: Vec<u32>,
+    diag_idx: Vec<u32>,
+    scatter: Vec<u32>,
+}
+
+impl Columns {
+    /// Column by column: the rows ≤ j coupled to j through an incident
+    /// element, sorted, then the value index of every local pair of those
+    /// elements that lands in column j.
+    fn build(
+        n: usize,
+        el: &FlatElements,
+        inc_ptr: &[usize],
+        inc: &[u32],
+    ) -> Result<Self, PatternError> {
         let mut col_ptr = Vec::with_capacity(n + 1);
         col_ptr.push(0u32);
         let mut row_idx: Vec<u32> = Vec::with_capacity(inc.len() * 4 + n);
         let mut diag_idx = Vec::with_capacity(n);
-        let mut scatter = vec![SKIP; *scatter_ptr.last().unwrap_or(&0)];
+        let mut scatter = vec![SKIP; *el.scatter_ptr.last().unwrap_or(&0)];
         let mut mark = vec![u32::MAX; n];
         let mut pos = vec![0u32; n];
         let mut rows: Vec<u32> = Vec::new();
@@ -139,8 +177,7 @@ impl Pattern {
             mark[j] = j as u32;
             let incident = &inc[inc_ptr[j]..inc_ptr[j + 1]];
             for &e in incident {
-                let e = e as usize;
-                for &d in &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]] {
+                for &d in el.dofs(e as usize) {
                     if d != NO_DOF && (d as usize) < j && mark[d as usize] != j as u32 {
                         mark[d as usize] = j as u32;
                         rows.push(d);
@@ -162,33 +199,59 @@ impl Pattern {
             col_ptr.push(row_idx.len() as u32);
             for &e in incident {
                 let e = e as usize;
-                let dofs = &elem_dofs[elem_dof_ptr[e]..elem_dof_ptr[e + 1]];
-                let ne = dofs.len();
-                let sc = &mut scatter[scatter_ptr[e]..scatter_ptr[e + 1]];
-                for (b, &db) in dofs.iter().enumerate() {
-                    if db as usize != j {
-                        continue;
-                    }
-                    for (a, &da) in dofs.iter().enumerate() {
-                        if da == NO_DOF || da as usize > j {
-                            continue;
-                        }
-                        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-                        sc[packed_upper_index(ne, lo, hi)] = pos[da as usize];
-                    }
-                }
+                let sc = &mut scatter[el.scatter_ptr[e]..el.scatter_ptr[e + 1]];
+                scatter_column(j, el.dofs(e), &pos, sc);
             }
         }
         row_idx.shrink_to_fit();
-        let pattern = Pattern {
-            n,
+        Ok(Columns {
             col_ptr,
             row_idx,
             diag_idx,
-            elem_dof_ptr,
-            elem_dofs,
-            scatter_ptr,
             scatter,
+        })
+    }
+}
+
+/// The scatter entries of one element in column `j`: every local pair
+/// (a, b) with dof b = j and dof a ≤ j gets the value index `pos[dof a]`.
+fn scatter_column(j: usize, dofs: &[u32], pos: &[u32], sc: &mut [u32]) {
+    let ne = dofs.len();
+    for (b, &db) in dofs.iter().enumerate() {
+        if db as usize != j {
+            continue;
+        }
+        for (a, &da) in dofs.iter().enumerate() {
+            if da == NO_DOF || da as usize > j {
+                continue;
+            }
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            sc[packed_upper_index(ne, lo, hi)] = pos[da as usize];
+        }
+    }
+}
+
+impl Pattern {
+    /// Builds the pattern of the union of `elements` (each a list of dof
+    /// indices, any length). Element `k` of the list is "slot" `k` for
+    /// [`SparseSym::add_element`].
+    pub fn try_new<E: AsRef<[u32]>>(n_dofs: usize, elements: &[E]) -> Result<Self, PatternError> {
+        if n_dofs >= u32::MAX as usize {
+            return Err(PatternError::TooManyDofs { n_dofs });
+        }
+        let n = n_dofs;
+        let el = FlatElements::new(n, elements)?;
+        let (inc_ptr, inc) = el.incidence(n);
+        let cols = Columns::build(n, &el, &inc_ptr, &inc)?;
+        let pattern = Pattern {
+            n,
+            col_ptr: cols.col_ptr,
+            row_idx: cols.row_idx,
+            diag_idx: cols.diag_idx,
+            elem_dof_ptr: el.ptr,
+            elem_dofs: el.dofs,
+            scatter_ptr: el.scatter_ptr,
+            scatter: cols.scatter,
         };
         // verify faer's invariants once (sorted, in range, monotone col_ptr)
         let _ = SymbolicSparseColMatRef::new_checked(

@@ -205,7 +205,9 @@ impl KktResidual {
     }
 }
 
-/// Result of a contact solve (all vectors in the layout of the problem).
+/// Result of a contact solve, all vectors in the layout of the problem: 3
+/// rows a point for a [`ContactProblem`], one (the normal) for a
+/// [`NormalProblem`], whose closed points are in state `Slip`.
 #[derive(Debug, Clone)]
 pub struct ContactSolution {
     /// Contact forces on side B, local frames (N).
@@ -229,6 +231,13 @@ pub struct ContactSolution {
     pub kkt: KktResidual,
     /// The reference magnitudes the relative tolerances refer to.
     pub scales: Scales,
+}
+
+impl ContactSolution {
+    /// Per point: does it carry force (stick or slip)?
+    pub fn closed(&self) -> Vec<bool> {
+        self.states.iter().map(|s| s.is_closed()).collect()
+    }
 }
 
 /// Rows of one point in a problem's vectors, and its friction law.

@@ -78,4 +78,4 @@ pub use contact::{
     FrictionModel, KktResidual, NormalProblem, Scales,
 };
 pub use frame::LocalFrame;
-pub use qp::{solve, solve_normal, ContactSettings, NormalSolution};
+pub use qp::{solve, solve_normal, ContactSettings};

@@ -18,6 +18,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::positive;
+
 /// The three adiabatic-rise forms of Zhu Bofang's practice.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "form", rename_all = "snake_case", deny_unknown_fields)]
@@ -116,15 +118,4 @@ impl AdiabaticRise {
                 AdiabaticRise::Hyperbolic { n, .. } => ok(n),
             }
     }
-}
-
-/// `Err("{field} must be > 0, got {v}")` unless v is a finite positive number.
-pub(crate) fn positive(field: &str, v: f64) -> Result<(), String> {
-    if !(v > 0.0) {
-        return Err(format!("{field} must be > 0, got {v}"));
-    }
-    if !v.is_finite() {
-        return Err(format!("{field} must be finite, got {v}"));
-    }
-    Ok(())
 }

@@ -61,6 +61,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::positive;
+
 /// Why a time step's ages cannot give a mid-step age (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum AgeStepError {
@@ -327,17 +329,6 @@ impl Poisson {
         let n = |x: f64| k * ((1.0 - 2.0 * nu) * x + nu * tr);
         [n(e[0]), n(e[1]), n(e[2]), g * e[3], g * e[4], g * e[5]]
     }
-}
-
-/// `Err("{field} must be > 0, got {v}")` unless v is finite and positive.
-pub(crate) fn positive(field: &str, v: f64) -> Result<(), String> {
-    if !(v > 0.0) {
-        return Err(format!("{field} must be > 0, got {v}"));
-    }
-    if !v.is_finite() {
-        return Err(format!("{field} must be finite, got {v}"));
-    }
-    Ok(())
 }
 
 /// `Err("{field} must be in (0, 3], got {v}")` for an age exponent.

@@ -86,7 +86,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::ageing::{mid_step_age, positive, AgeStepError, ModulusOfAge, Poisson};
+use super::ageing::{mid_step_age, AgeStepError, ModulusOfAge, Poisson};
+use super::positive;
 
 /// One term of the creep compliance: (f + g τ^{−p})(1 − e^{−r (t − τ)}).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -25,3 +25,17 @@ pub use creep::{
     ScalarCreepState, StepCoefficients,
 };
 pub use pipe_cooling::{hydration_under_cooling, PipeLayout, ZhuPipe};
+
+/// `Err("{field} must be > 0, got {v}")` unless v is a finite positive number
+/// (`must be finite` for +∞): the field check of every law's `validate`.
+// `!(v > 0.0)` is the comparison that also rejects NaN.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), String> {
+    if !(v > 0.0) {
+        return Err(format!("{field} must be > 0, got {v}"));
+    }
+    if !v.is_finite() {
+        return Err(format!("{field} must be finite, got {v}"));
+    }
+    Ok(())
+}

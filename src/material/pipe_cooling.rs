@@ -96,7 +96,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::adiabatic::{positive, AdiabaticRise};
+use super::adiabatic::AdiabaticRise;
+use super::positive;
 
 /// Geometry and hydraulics of one embedded cooling-pipe layout.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -564,235 +565,352 @@ pub fn hydration_under_cooling(
     if !tau1.is_finite() {
         return f64::NAN;
     }
-    // y0 = hydration variable at the stage start, big_y = its growth over t.
-    let (theta0, y0, big_y, map, branches) = match *rise {
-        AdiabaticRise::Exponential { theta0, m } => {
-            (theta0, m * tau_k, m * t, TimeLeft::Exponential { m }, false)
-        }
-        AdiabaticRise::Compound { theta0, a, b } => {
-            let y1 = a * tau1.powf(b);
-            let (y0, big_y) = if tau_k > 0.0 {
-                let y0 = a * tau_k.powf(b);
-                (y0, y0 * (b * (t / tau_k).ln_1p()).exp_m1())
-            } else {
-                (0.0, y1)
-            };
-            // τ(y) = (y/a)^{1/b} branches at y = 0, i.e. η = −y0.
-            (
-                theta0,
-                y0,
-                big_y,
-                TimeLeft::Compound {
-                    a,
-                    b,
-                    t,
-                    tau_k,
-                    tau1,
-                    y0,
-                    y1,
-                    half_y: 0.5 * big_y,
-                },
-                true,
-            )
-        }
-        AdiabaticRise::Hyperbolic { theta0, n } => (
-            theta0,
-            (tau_k / n).ln_1p(),
-            (t / (n + tau_k)).ln_1p(),
-            TimeLeft::Hyperbolic {
-                n_plus_tau1: n + tau1,
-            },
-            false,
-        ),
-    };
+    let (theta0, f) = Integrand::new(p, s, rise, tau_k, t, tau1);
+    let big_y = f.big_y;
     if !(big_y > 0.0) || !big_y.is_finite() {
         // Y underflows only when H is below ~1e-300 θ0.
         return if big_y == 0.0 { 0.0 } else { f64::NAN };
     }
-
-    // Cut range. log f = −η − pV^s; the tail η > η_hi has f ≤ e^{−η} and
-    // the head where pV^s > lim has f ≤ e^{−lim − η}: each drops at most
-    // e^{g_ref − CUT}, while the kept end contributes ~e^{g_ref}.
-    let p_v_s = |eta: f64, delta: f64| {
-        if p == 0.0 {
-            0.0
-        } else {
-            p * map.v(eta, delta).powf(s)
-        }
-    };
-    let g_start = -p * t.powf(s);
-    let g_ref = g_start.max(-big_y);
-    let lim = CUT - g_ref;
-    let (eta_hi, delta_hi) = if big_y > lim {
-        (lim, big_y - lim)
-    } else {
-        (big_y, 0.0)
-    };
-    let v_of_level = |level: f64| (level / p).powf(1.0 / s);
-    let (eta_lo, delta_lo) = if -g_start > lim {
-        let d = map.delta(v_of_level(lim)).min(big_y);
-        (big_y - d, d)
-    } else {
-        (0.0, big_y)
-    };
-    if !(delta_lo > delta_hi) {
+    let Some((start, end)) = f.kept_range(t) else {
         // The kept range underflowed (p ~ 1e20): nothing measurable is left.
         return 0.0;
-    }
-
-    let start = Point {
-        eta: eta_lo,
-        delta: delta_lo,
     };
-    let end = Point {
-        eta: eta_hi,
-        delta: delta_hi,
-    };
-    let from_eta = |eta: f64| Point {
-        eta,
-        delta: big_y - eta,
-    };
-    let from_delta = |delta: f64| Point {
-        eta: big_y - delta,
-        delta,
-    };
-    let mut pts: Vec<Point> = Vec::with_capacity(32);
-    // Uniform in η: bounds the change of e^{−η}.
-    let mut eta = eta_lo + PANEL_VAR;
-    while eta < eta_hi {
-        pts.push(from_eta(eta));
-        eta += PANEL_VAR;
-    }
-    // Uniform in pV^s: bounds the change of φ.
-    let level_lo = p_v_s(eta_lo, delta_lo);
-    let level_hi = p_v_s(eta_hi, delta_hi);
-    if p > 0.0 {
-        let mut level = (level_hi / PANEL_VAR).floor() * PANEL_VAR + PANEL_VAR;
-        while level < level_lo {
-            pts.push(from_delta(map.delta(v_of_level(level))));
-            level += PANEL_VAR;
-        }
-    }
-    // Substitution powers of the end panels: the branch terms V^s ~ δ^s and
-    // (y/a)^{1/b} become w^{q(s+1)−1} and w^{q(1/b+1)−1}; exponents ≥ 6
-    // leave Gauss–Legendre errors ~16^{−14}, and the smallest such q keeps
-    // the smooth part of low degree in w (a larger q spreads it over
-    // w^{q/b}, w^{qs}, … and costs digits).
-    let q_right = (7.0 / (1.0 + s)).ceil().clamp(1.0, 12.0) as i32;
     let q_left = match *rise {
         AdiabaticRise::Compound { b, .. } => (7.0 * b / (1.0 + b)).ceil().clamp(1.0, 12.0) as i32,
         _ => 1,
     };
-    let (qr, ql) = (q_right as f64, q_left as f64);
-    // Right end (V → 0, branch point of V^s when s ≠ 1): an end panel
-    // [0, d_end] in δ, then panels growing geometrically from it. A
-    // substitution w^q pulls the other end's branch point towards the panel:
-    // keep it at w ≥ √2 (Bernstein ellipse ρ > 3.3 for [0, 1]).
-    let right_singular = delta_hi == 0.0;
-    let mut d_end = 0.0;
-    if right_singular {
-        d_end = END_VAR.min(delta_lo);
-        if p > 0.0 && END_VAR < level_lo {
-            d_end = d_end.min(map.delta(v_of_level(END_VAR)));
+    theta0 * f.integrate(&f.panels(start, end, q_left))
+}
+
+/// exp(−y0 − η − pV^s), the integrand of H/θ0 in the hydration variable
+/// (module doc, "Quadrature of H"), with what its panels are cut by.
+#[derive(Clone, Copy)]
+struct Integrand {
+    p: f64,
+    s: f64,
+    /// Hydration variable at the stage start.
+    y0: f64,
+    /// Growth Y of the hydration variable over the stage.
+    big_y: f64,
+    map: TimeLeft,
+    /// The compound form: τ(y) = (y/a)^{1/b} branches at y = 0 (η = −y0).
+    branches: bool,
+}
+
+/// Panel boundaries from the start to the end of the kept range, and the
+/// substitution powers of the end panels that carry a branch point.
+struct Panels {
+    kept: Vec<Point>,
+    /// The last panel reaches V = 0 and carries δ = h w^q_right.
+    right_singular: bool,
+    q_right: i32,
+    /// The first panel is near the compound form's branch point and carries
+    /// y = y_b w^q_left.
+    left_singular: bool,
+    q_left: i32,
+}
+
+impl Integrand {
+    /// Step 1, the substitution: the hydration variable of the rise's form
+    /// at the stage start (y0), its growth over the stage (Y) and the time
+    /// left V(δ); returns θ0 alongside.
+    fn new(p: f64, s: f64, rise: &AdiabaticRise, tau_k: f64, t: f64, tau1: f64) -> (f64, Self) {
+        let (theta0, y0, big_y, map, branches) = match *rise {
+            AdiabaticRise::Exponential { theta0, m } => {
+                (theta0, m * tau_k, m * t, TimeLeft::Exponential { m }, false)
+            }
+            AdiabaticRise::Compound { theta0, a, b } => {
+                let y1 = a * tau1.powf(b);
+                let (y0, big_y) = if tau_k > 0.0 {
+                    let y0 = a * tau_k.powf(b);
+                    (y0, y0 * (b * (t / tau_k).ln_1p()).exp_m1())
+                } else {
+                    (0.0, y1)
+                };
+                // τ(y) = (y/a)^{1/b} branches at y = 0, i.e. η = −y0.
+                (
+                    theta0,
+                    y0,
+                    big_y,
+                    TimeLeft::Compound {
+                        a,
+                        b,
+                        t,
+                        tau_k,
+                        tau1,
+                        y0,
+                        y1,
+                        half_y: 0.5 * big_y,
+                    },
+                    true,
+                )
+            }
+            AdiabaticRise::Hyperbolic { theta0, n } => (
+                theta0,
+                (tau_k / n).ln_1p(),
+                (t / (n + tau_k)).ln_1p(),
+                TimeLeft::Hyperbolic {
+                    n_plus_tau1: n + tau1,
+                },
+                false,
+            ),
+        };
+        let f = Integrand {
+            p,
+            s,
+            y0,
+            big_y,
+            map,
+            branches,
+        };
+        (theta0, f)
+    }
+
+    /// pV^s at a point given by both coordinates.
+    fn p_v_s(&self, eta: f64, delta: f64) -> f64 {
+        if self.p == 0.0 {
+            0.0
+        } else {
+            self.p * self.map.v(eta, delta).powf(self.s)
         }
-        if branches {
-            d_end = d_end.min((big_y + y0) / 2f64.powf(0.5 * qr));
+    }
+
+    /// V where pV^s = `level`.
+    fn v_of_level(&self, level: f64) -> f64 {
+        (level / self.p).powf(1.0 / self.s)
+    }
+
+    fn f(&self, eta: f64, delta: f64) -> f64 {
+        (-self.y0 - eta - self.p_v_s(eta, delta)).exp()
+    }
+
+    fn at_eta(&self, eta: f64) -> Point {
+        Point {
+            eta,
+            delta: self.big_y - eta,
+        }
+    }
+
+    fn at_delta(&self, delta: f64) -> Point {
+        Point {
+            eta: self.big_y - delta,
+            delta,
+        }
+    }
+
+    /// Step 2, the cut: the range kept from the stage of length `t`, `None`
+    /// when nothing of it is left. log f = −η − pV^s; the tail η > η_hi has
+    /// f ≤ e^{−η} and the head where pV^s > lim has f ≤ e^{−lim − η}: each
+    /// drops at most e^{g_ref − CUT}, while the kept end contributes
+    /// ~e^{g_ref}.
+    fn kept_range(&self, t: f64) -> Option<(Point, Point)> {
+        let (p, s, big_y) = (self.p, self.s, self.big_y);
+        let g_start = -p * t.powf(s);
+        let g_ref = g_start.max(-big_y);
+        let lim = CUT - g_ref;
+        let (eta_hi, delta_hi) = if big_y > lim {
+            (lim, big_y - lim)
+        } else {
+            (big_y, 0.0)
+        };
+        let (eta_lo, delta_lo) = if -g_start > lim {
+            let d = self.map.delta(self.v_of_level(lim)).min(big_y);
+            (big_y - d, d)
+        } else {
+            (0.0, big_y)
+        };
+        if !(delta_lo > delta_hi) {
+            return None;
+        }
+        let start = Point {
+            eta: eta_lo,
+            delta: delta_lo,
+        };
+        let end = Point {
+            eta: eta_hi,
+            delta: delta_hi,
+        };
+        Some((start, end))
+    }
+
+    /// Step 3, the panels: boundaries where either monotone term has changed
+    /// by `PANEL_VAR`, the graded end panels at the branch points, then the
+    /// strictly advancing sequence of them from `start` to `end`.
+    fn panels(&self, start: Point, end: Point, q_left: i32) -> Panels {
+        let p = self.p;
+        let mut pts: Vec<Point> = Vec::with_capacity(32);
+        // Uniform in η: bounds the change of e^{−η}.
+        let mut eta = start.eta + PANEL_VAR;
+        while eta < end.eta {
+            pts.push(self.at_eta(eta));
+            eta += PANEL_VAR;
+        }
+        // Uniform in pV^s: bounds the change of φ.
+        let level_lo = self.p_v_s(start.eta, start.delta);
+        let level_hi = self.p_v_s(end.eta, end.delta);
+        if p > 0.0 {
+            let mut level = (level_hi / PANEL_VAR).floor() * PANEL_VAR + PANEL_VAR;
+            while level < level_lo {
+                pts.push(self.at_delta(self.map.delta(self.v_of_level(level))));
+                level += PANEL_VAR;
+            }
+        }
+        // Substitution powers of the end panels: the branch terms V^s ~ δ^s and
+        // (y/a)^{1/b} become w^{q(s+1)−1} and w^{q(1/b+1)−1}; exponents ≥ 6
+        // leave Gauss–Legendre errors ~16^{−14}, and the smallest such q keeps
+        // the smooth part of low degree in w (a larger q spreads it over
+        // w^{q/b}, w^{qs}, … and costs digits).
+        let q_right = (7.0 / (1.0 + self.s)).ceil().clamp(1.0, 12.0) as i32;
+        let right_singular = end.delta == 0.0;
+        let d_end = if right_singular {
+            self.right_end(&mut pts, start, level_lo, q_right as f64)
+        } else {
+            0.0
+        };
+        let left = if self.branches && start.eta == 0.0 {
+            Some(self.left_end(&mut pts, end, level_lo, q_left as f64, right_singular))
+        } else {
+            None
+        };
+        let (left_singular, e_end) = left.unwrap_or((false, 0.0));
+        // Near the right end η = Y − δ can tie for distinct δ: break ties on δ.
+        pts.sort_by(|a, b| a.eta.total_cmp(&b.eta).then(b.delta.total_cmp(&a.delta)));
+        // A strictly advancing sequence; nothing inside the substituted end
+        // panels (a sliver left there by rounding would put the branch point at
+        // the end of a plain Gauss panel); no slivers, which only cost time.
+        let mut kept: Vec<Point> = Vec::with_capacity(pts.len() + 3);
+        kept.push(start);
+        for q in pts {
+            let last = kept[kept.len() - 1];
+            let inside_right = right_singular && q.delta < d_end * (1.0 - 1e-9);
+            let inside_left = left_singular && q.eta < e_end * (1.0 - 1e-9);
+            if inside_right
+                || inside_left
+                || !advances(last, q)
+                || !advances(q, end)
+                || close(last, q)
+                || close(q, end)
+            {
+                continue;
+            }
+            kept.push(q);
+        }
+        kept.push(end);
+        if kept.len() == 2 && left_singular && right_singular {
+            // One panel cannot carry both substitutions.
+            kept.insert(1, self.at_eta(0.5 * (start.eta + end.eta)));
+        }
+        Panels {
+            kept,
+            right_singular,
+            q_right,
+            left_singular,
+            q_left,
+        }
+    }
+
+    /// Right end (V → 0, branch point of V^s when s ≠ 1): an end panel
+    /// [0, d_end] in δ, then panels growing geometrically from it; returns
+    /// d_end. A substitution w^q pulls the other end's branch point towards
+    /// the panel: keep it at w ≥ √2 (Bernstein ellipse ρ > 3.3 for [0, 1]).
+    fn right_end(&self, pts: &mut Vec<Point>, start: Point, level_lo: f64, qr: f64) -> f64 {
+        let delta_lo = start.delta;
+        let mut d_end = END_VAR.min(delta_lo);
+        if self.p > 0.0 && END_VAR < level_lo {
+            d_end = d_end.min(self.map.delta(self.v_of_level(END_VAR)));
+        }
+        if self.branches {
+            d_end = d_end.min((self.big_y + self.y0) / 2f64.powf(0.5 * qr));
         }
         let mut d = d_end;
         while d > 0.0 && d < delta_lo {
-            pts.push(from_delta(d));
+            pts.push(self.at_delta(d));
             d *= GRADE;
         }
+        d_end
     }
-    // Compound: branch point of τ(y) at η = −y0; end panel [0, e_end] in η.
-    let mut left_singular = false;
-    let mut e_end = 0.0;
-    if branches && eta_lo == 0.0 {
-        e_end = LEFT_END_VAR.min(eta_hi);
-        if p > 0.0 && level_lo > LEFT_END_VAR {
-            e_end = e_end.min(big_y - map.delta(v_of_level(level_lo - LEFT_END_VAR)));
+
+    /// Compound form at the stage start: branch point of τ(y) at η = −y0, an
+    /// end panel [0, e_end] in η, then panels growing geometrically from the
+    /// branch point; returns whether the first panel needs the substitution,
+    /// and e_end.
+    fn left_end(
+        &self,
+        pts: &mut Vec<Point>,
+        end: Point,
+        level_lo: f64,
+        ql: f64,
+        right_singular: bool,
+    ) -> (bool, f64) {
+        let (big_y, y0, eta_hi) = (self.big_y, self.y0, end.eta);
+        let mut e_end = LEFT_END_VAR.min(eta_hi);
+        if self.p > 0.0 && level_lo > LEFT_END_VAR {
+            e_end = e_end.min(big_y - self.map.delta(self.v_of_level(level_lo - LEFT_END_VAR)));
         }
         if right_singular {
             let room = (big_y + y0) / 2f64.powf(0.5 * ql) - y0;
             e_end = e_end.min(room.max(0.0));
         }
-        left_singular = y0 < 0.5 * e_end;
+        let left_singular = y0 < 0.5 * e_end;
         // Distance from the branch point is y = y0 + η.
         let mut y = y0 + e_end;
         while y > 0.0 && y - y0 < eta_hi {
-            pts.push(from_eta(y - y0));
+            pts.push(self.at_eta(y - y0));
             y *= GRADE;
         }
-    }
-    // Near the right end η = Y − δ can tie for distinct δ: break ties on δ.
-    pts.sort_by(|a, b| a.eta.total_cmp(&b.eta).then(b.delta.total_cmp(&a.delta)));
-    // A strictly advancing sequence; nothing inside the substituted end
-    // panels (a sliver left there by rounding would put the branch point at
-    // the end of a plain Gauss panel); no slivers, which only cost time.
-    let mut kept: Vec<Point> = Vec::with_capacity(pts.len() + 3);
-    kept.push(start);
-    for q in pts {
-        let last = kept[kept.len() - 1];
-        let inside_right = right_singular && q.delta < d_end * (1.0 - 1e-9);
-        let inside_left = left_singular && q.eta < e_end * (1.0 - 1e-9);
-        if inside_right
-            || inside_left
-            || !advances(last, q)
-            || !advances(q, end)
-            || close(last, q)
-            || close(q, end)
-        {
-            continue;
-        }
-        kept.push(q);
-    }
-    kept.push(end);
-    if kept.len() == 2 && left_singular && right_singular {
-        // One panel cannot carry both substitutions.
-        kept.insert(1, from_eta(0.5 * (eta_lo + eta_hi)));
+        (left_singular, e_end)
     }
 
-    let f = |eta: f64, delta: f64| (-y0 - eta - p_v_s(eta, delta)).exp();
-    let mut sum = 0.0;
-    let last = kept.len() - 2;
-    for (i, w) in kept.windows(2).enumerate() {
-        let (a, b) = (w[0], w[1]);
-        if i == last && right_singular {
-            // δ = h w^q on w ∈ [0, 1].
-            let h = a.delta;
-            for &(x, wt) in GL16.iter() {
-                for xs in [x, -x] {
-                    let u = 0.5 * (1.0 + xs);
-                    let uq1 = u.powi(q_right - 1);
-                    let delta = h * uq1 * u;
-                    sum += wt * 0.5 * qr * h * uq1 * f(big_y - delta, delta);
+    /// Step 4, the quadrature: 16-point Gauss–Legendre on every panel, the
+    /// substituted end panels in w; one running sum over all panels. Returns
+    /// H/θ0.
+    fn integrate(&self, panels: &Panels) -> f64 {
+        let big_y = self.big_y;
+        let y0 = self.y0;
+        let (qr, ql) = (panels.q_right as f64, panels.q_left as f64);
+        let mut sum = 0.0;
+        let last = panels.kept.len() - 2;
+        for (i, w) in panels.kept.windows(2).enumerate() {
+            let (a, b) = (w[0], w[1]);
+            if i == last && panels.right_singular {
+                // δ = h w^q on w ∈ [0, 1].
+                let h = a.delta;
+                for &(x, wt) in GL16.iter() {
+                    for xs in [x, -x] {
+                        let u = 0.5 * (1.0 + xs);
+                        let uq1 = u.powi(panels.q_right - 1);
+                        let delta = h * uq1 * u;
+                        sum += wt * 0.5 * qr * h * uq1 * self.f(big_y - delta, delta);
+                    }
                 }
-            }
-        } else if i == 0 && left_singular {
-            // y = y_b w^q on w ∈ [w_lo, 1], y = y0 + η.
-            let yb = y0 + b.eta;
-            let w_lo = (y0 / yb).powf(1.0 / ql);
-            let half = 0.5 * (1.0 - w_lo);
-            for &(x, wt) in GL16.iter() {
-                for xs in [x, -x] {
-                    let u = w_lo + half * (1.0 + xs);
-                    let uq1 = u.powi(q_left - 1);
-                    let eta = (yb * uq1 * u - y0).max(0.0);
-                    sum += wt * half * ql * yb * uq1 * f(eta, big_y - eta);
+            } else if i == 0 && panels.left_singular {
+                // y = y_b w^q on w ∈ [w_lo, 1], y = y0 + η.
+                let yb = y0 + b.eta;
+                let w_lo = (y0 / yb).powf(1.0 / ql);
+                let half = 0.5 * (1.0 - w_lo);
+                for &(x, wt) in GL16.iter() {
+                    for xs in [x, -x] {
+                        let u = w_lo + half * (1.0 + xs);
+                        let uq1 = u.powi(panels.q_left - 1);
+                        let eta = (yb * uq1 * u - y0).max(0.0);
+                        sum += wt * half * ql * yb * uq1 * self.f(eta, big_y - eta);
+                    }
                 }
-            }
-        } else {
-            let half = if a.delta < a.eta {
-                0.5 * (a.delta - b.delta)
             } else {
-                0.5 * (b.eta - a.eta)
-            };
-            for &(x, wt) in GL16.iter() {
-                for xs in [x, -x] {
-                    sum += wt * half * f(a.eta + half * (1.0 + xs), b.delta + half * (1.0 - xs));
+                let half = if a.delta < a.eta {
+                    0.5 * (a.delta - b.delta)
+                } else {
+                    0.5 * (b.eta - a.eta)
+                };
+                for &(x, wt) in GL16.iter() {
+                    for xs in [x, -x] {
+                        sum += wt
+                            * half
+                            * self.f(a.eta + half * (1.0 + xs), b.delta + half * (1.0 - xs));
+                    }
                 }
             }
         }
+        sum
     }
-    theta0 * sum
 }

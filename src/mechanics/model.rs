@@ -818,7 +818,7 @@ impl MechanicsModel {
     /// None until both blocks exist there.
     pub fn point_aperture(&self, mesh: &Mesh, zp: &ZoneSite) -> Option<(f64, JointState)> {
         let pair = &mesh.face_pairs[zp.pair as usize];
-        let n = crate::mesh::quad_shape(zp.s, zp.t);
+        let n = crate::fem::quad4::shape([zp.s, zp.t]);
         let (mut value, mut label, mut best) = (0.0, JointState::Stick, -1.0);
         for (k, &nk) in n.iter().enumerate() {
             if pair.nodes_a[k] == pair.nodes_b[k] {

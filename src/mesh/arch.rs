@@ -53,33 +53,9 @@
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its
 //! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
 
-use super::geometry::ArchGeometry;
-use super::grid::{self, Cell, Grid};
+use super::geometry::{at_least, check, non_negative, positive, ArchGeometry};
+use super::grid::{self, BlockRow, Layers};
 use super::{Mesh, MeshError};
-
-fn check(ok: bool, name: &str, msg: impl FnOnce() -> String) -> Result<(), MeshError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(MeshError::param(name, msg()))
-    }
-}
-
-fn positive(name: &str, v: f64) -> Result<(), MeshError> {
-    check(v.is_finite() && v > 0.0, name, || {
-        format!("must be > 0, got {v}")
-    })
-}
-
-fn non_negative(name: &str, v: f64) -> Result<(), MeshError> {
-    check(v.is_finite() && v >= 0.0, name, || {
-        format!("must be >= 0, got {v}")
-    })
-}
-
-fn at_least(name: &str, v: u32, min: u32) -> Result<(), MeshError> {
-    check(v >= min, name, || format!("must be >= {min}, got {v}"))
-}
 
 /// The arch's ring at one elevation.
 #[derive(Debug, Clone, Copy)]
@@ -149,6 +125,46 @@ pub fn generate_arch(
     lift_height: f64,
     zone_height: f64,
 ) -> Result<Mesh, MeshError> {
+    let zone_lifts = check_params(p, lift_height, zone_height)?;
+    let layer_z = layer_boundaries(p, lift_height)?;
+    let n_layers = layer_z.len() - 1;
+    let row = BlockRow {
+        n_blocks: p.n_blocks,
+        elements_per_block: p.elements_per_block,
+        elements_across: p.elements_across,
+        margin: if p.rock_margin_m > 0.0 {
+            p.rock_margin_elements as usize
+        } else {
+            0
+        },
+        rock_layers: if p.rock_depth_m > 0.0 {
+            p.rock_layers as usize
+        } else {
+            0
+        },
+        layers: n_layers as u64,
+        rock_beyond_abutments: true,
+    };
+    row.size()?;
+    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, &layer_z);
+    let rings = rings(p, &zs)?;
+    let pos = node_positions(p, &row, &rings, &zs);
+    let blocks = foundation_layers(p, &layer_z, zone_lifts)
+        .into_iter()
+        .map(|b| (b, n_layers as u32 - b))
+        .collect();
+    let layers = Layers {
+        z: layer_z,
+        lift_height,
+        zone_lifts,
+        per_lift: 1,
+        blocks,
+    };
+    row.build(pos, layers)
+}
+
+/// Checks every parameter in scene order; returns the lifts per zone.
+fn check_params(p: &ArchGeometry, lift_height: f64, zone_height: f64) -> Result<u32, MeshError> {
     at_least("n_blocks", p.n_blocks, 2)?;
     positive("height_m", p.height_m)?;
     check(p.base_elevation_m.is_finite(), "base_elevation_m", || {
@@ -185,12 +201,14 @@ pub fn generate_arch(
     if p.rock_margin_m > 0.0 {
         at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
     }
-    let zone_lifts = grid::zone_lifts(lift_height, zone_height)?;
+    grid::zone_lifts(lift_height, zone_height)
+}
 
-    // Layers: one per lift, the crest layer absorbs the remainder.
+/// Concrete layer boundaries: one layer per lift from the base, the crest
+/// layer absorbing the remainder of the height.
+fn layer_boundaries(p: &ArchGeometry, lift_height: f64) -> Result<Vec<f64>, MeshError> {
     let h = p.height_m;
     let base = p.base_elevation_m;
-    let crest = base + h;
     let ratio = h / lift_height;
     check(ratio < 1e6, "height_m", || {
         format!("is more than a million lifts ({h} m with {lift_height} m lifts)")
@@ -199,47 +217,13 @@ pub fn generate_arch(
     let mut layer_z: Vec<f64> = (0..n_layers)
         .map(|l| base + l as f64 * lift_height)
         .collect();
-    layer_z.push(crest);
+    layer_z.push(base + h);
+    Ok(layer_z)
+}
 
-    let m = if p.rock_margin_m > 0.0 {
-        p.rock_margin_elements as usize
-    } else {
-        0
-    };
-    let rl = if p.rock_depth_m > 0.0 {
-        p.rock_layers as usize
-    } else {
-        0
-    };
-    let epb = p.elements_per_block as usize;
-    let na = p.elements_across as usize;
-    let nd = (p.n_blocks as u64).saturating_mul(epb as u64);
-    let sizes = [
-        nd.saturating_add(2 * m as u64),
-        na as u64 + 2 * m as u64,
-        (n_layers + rl) as u64,
-    ];
-    if sizes.iter().any(|&s| s > u32::MAX as u64) {
-        return Err(MeshError::TooLarge {
-            nodes: u64::MAX,
-            elements: u64::MAX,
-            limit: grid::MAX_ENTITIES,
-        });
-    }
-    let (ni, nj, nk) = (sizes[0] as usize, sizes[1] as usize, sizes[2] as usize);
-    grid::check_size(ni, nj, nk)?;
-    let nd = nd as usize;
-
-    // Elevations of the logical levels.
-    let zs: Vec<f64> = (0..=nk)
-        .map(|k| {
-            if k < rl {
-                base - p.rock_depth_m + p.rock_depth_m * k as f64 / rl as f64
-            } else {
-                layer_z[k - rl]
-            }
-        })
-        .collect();
+/// The ring of every logical level `zs`; an error when the downstream face
+/// would reach the centre of curvature.
+fn rings(p: &ArchGeometry, zs: &[f64]) -> Result<Vec<Ring>, MeshError> {
     let rings: Vec<Ring> = zs.iter().map(|&z| ring(p, z)).collect();
     for (k, r) in rings.iter().enumerate() {
         let rd = r.r_up - r.t;
@@ -255,11 +239,20 @@ pub fn generate_arch(
             ));
         }
     }
+    Ok(rings)
+}
 
+/// Grid nodes (i fastest): radial across the dam and in the upstream margin,
+/// along +y in the downstream margin, along the crest tangent beyond the
+/// abutments (module doc, "Rock").
+fn node_positions(p: &ArchGeometry, row: &BlockRow, rings: &[Ring], zs: &[f64]) -> Vec<[f64; 3]> {
+    let (m, margin) = (row.margin, p.rock_margin_m);
+    let na = p.elements_across as usize;
+    let nd = p.n_blocks as usize * p.elements_per_block as usize;
+    let (ni, nj) = (nd + 2 * m, na + 2 * m);
     let phi_total = p.central_angle_deg.to_radians();
     let phi_s = -0.5 * phi_total;
     let phi_e = 0.5 * phi_total;
-    let margin = p.rock_margin_m;
     // Per i: (angle, extension along the tangent).
     let along: Vec<(f64, f64)> = (0..=ni)
         .map(|i| {
@@ -273,10 +266,8 @@ pub fn generate_arch(
         })
         .collect();
 
-    let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * (nk + 1));
-    for k in 0..=nk {
-        let rg = rings[k];
-        let z = zs[k];
+    let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * zs.len());
+    for (rg, &z) in rings.iter().zip(zs) {
         for j in 0..=nj {
             let (r, dy) = if j < m {
                 (rg.r_up + margin * (m - j) as f64 / m as f64, 0.0)
@@ -291,48 +282,5 @@ pub fn generate_arch(
             }
         }
     }
-
-    let base_layers = foundation_layers(p, &layer_z, zone_lifts);
-    let mut cells = Vec::with_capacity(ni * nj * nk);
-    for k in 0..nk {
-        for j in 0..nj {
-            for i in 0..ni {
-                let c = if k < rl || i < m || i >= m + nd {
-                    Cell::Rock
-                } else {
-                    let layer = (k - rl) as u32;
-                    let b = (i - m) / epb;
-                    if layer < base_layers[b] {
-                        Cell::Rock
-                    } else if j >= m && j < m + na {
-                        Cell::Concrete {
-                            block: b as u32 + 1,
-                            layer,
-                        }
-                    } else {
-                        Cell::Void
-                    }
-                };
-                cells.push(c);
-            }
-        }
-    }
-
-    grid::build(Grid {
-        ni,
-        nj,
-        nk,
-        pos,
-        cells,
-        j0: m,
-        j1: m + na,
-        layer_z,
-        lift_height,
-        zone_lifts,
-        layers_per_lift: 1,
-        block_layers: base_layers
-            .iter()
-            .map(|&b| (b, n_layers as u32 - b))
-            .collect(),
-    })
+    pos
 }

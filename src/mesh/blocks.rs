@@ -9,33 +9,9 @@
 //! `layers_per_lift` per lift, `rock_layers` in the rock, `rock_margin_elements`
 //! across each margin. Joints are the planes x = b·L, b = 1..N−1.
 
-use super::geometry::BlocksGeometry;
-use super::grid::{self, Cell, Grid};
+use super::geometry::{at_least, non_negative, positive, BlocksGeometry};
+use super::grid::{self, BlockRow, Layers};
 use super::{Mesh, MeshError};
-
-fn positive(name: &str, v: f64) -> Result<(), MeshError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(MeshError::param(name, format!("must be > 0, got {v}")))
-    }
-}
-
-fn non_negative(name: &str, v: f64) -> Result<(), MeshError> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(MeshError::param(name, format!("must be >= 0, got {v}")))
-    }
-}
-
-fn at_least_one(name: &str, v: u32) -> Result<(), MeshError> {
-    if v >= 1 {
-        Ok(())
-    } else {
-        Err(MeshError::param(name, format!("must be >= 1, got {v}")))
-    }
-}
 
 /// Build the mesh of [`BlocksGeometry`] with lifts of `lift_height` (m) and
 /// grouting zones of `zone_height` (m) (a whole number of lifts).
@@ -44,13 +20,46 @@ pub fn generate_blocks(
     lift_height: f64,
     zone_height: f64,
 ) -> Result<Mesh, MeshError> {
-    at_least_one("n_blocks", p.n_blocks)?;
+    let zone_lifts = check_params(p, lift_height, zone_height)?;
+    let has_rock = p.rock_depth_m > 0.0;
+    let row = BlockRow {
+        n_blocks: p.n_blocks,
+        elements_per_block: p.elements_per_block,
+        elements_across: p.elements_across,
+        margin: if has_rock && p.rock_margin_m > 0.0 {
+            p.rock_margin_elements as usize
+        } else {
+            0
+        },
+        rock_layers: if has_rock { p.rock_layers as usize } else { 0 },
+        layers: p.n_lifts as u64 * p.layers_per_lift as u64,
+        rock_beyond_abutments: false,
+    };
+    row.size()?;
+    let dz = lift_height / p.layers_per_lift as f64;
+    let layer_z: Vec<f64> = (0..=row.layers as usize)
+        .map(|l| p.base_elevation_m + l as f64 * dz)
+        .collect();
+    let pos = node_positions(p, &row, &layer_z);
+    let layers = Layers {
+        z: layer_z,
+        lift_height,
+        zone_lifts,
+        per_lift: p.layers_per_lift,
+        blocks: vec![(0, p.n_lifts); p.n_blocks as usize],
+    };
+    row.build(pos, layers)
+}
+
+/// Checks every parameter in scene order; returns the lifts per zone.
+fn check_params(p: &BlocksGeometry, lift_height: f64, zone_height: f64) -> Result<u32, MeshError> {
+    at_least("n_blocks", p.n_blocks, 1)?;
     positive("block_length_m", p.block_length_m)?;
     positive("thickness_m", p.thickness_m)?;
-    at_least_one("n_lifts", p.n_lifts)?;
-    at_least_one("elements_per_block", p.elements_per_block)?;
-    at_least_one("elements_across", p.elements_across)?;
-    at_least_one("layers_per_lift", p.layers_per_lift)?;
+    at_least("n_lifts", p.n_lifts, 1)?;
+    at_least("elements_per_block", p.elements_per_block, 1)?;
+    at_least("elements_across", p.elements_across, 1)?;
+    at_least("layers_per_lift", p.layers_per_lift, 1)?;
     non_negative("rock_depth_m", p.rock_depth_m)?;
     non_negative("rock_margin_m", p.rock_margin_m)?;
     if !p.base_elevation_m.is_finite() {
@@ -62,7 +71,7 @@ pub fn generate_blocks(
     let zone_lifts = grid::zone_lifts(lift_height, zone_height)?;
     let has_rock = p.rock_depth_m > 0.0;
     if has_rock {
-        at_least_one("rock_layers", p.rock_layers)?;
+        at_least("rock_layers", p.rock_layers, 1)?;
     } else if p.rock_margin_m > 0.0 {
         return Err(MeshError::param(
             "rock_margin_m",
@@ -72,76 +81,29 @@ pub fn generate_blocks(
             ),
         ));
     }
-    let has_margin = has_rock && p.rock_margin_m > 0.0;
-    if has_margin {
-        at_least_one("rock_margin_elements", p.rock_margin_elements)?;
+    if has_rock && p.rock_margin_m > 0.0 {
+        at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
     }
+    Ok(zone_lifts)
+}
 
-    let m = if has_margin {
-        p.rock_margin_elements as usize
-    } else {
-        0
-    };
-    let rl = if has_rock { p.rock_layers as usize } else { 0 };
+/// Grid nodes on the axis-aligned lines of [`axis`], i fastest.
+fn node_positions(p: &BlocksGeometry, row: &BlockRow, layer_z: &[f64]) -> Vec<[f64; 3]> {
+    let (m, margin) = (row.margin, p.rock_margin_m);
     let epb = p.elements_per_block as usize;
     let na = p.elements_across as usize;
-    let lpl = p.layers_per_lift as usize;
-    let n_layers_u64 = p.n_lifts as u64 * lpl as u64;
-    let ni = (p.n_blocks as u64)
-        .saturating_mul(epb as u64)
-        .saturating_add(2 * m as u64);
-    let nj = na as u64 + 2 * m as u64;
-    let nk = n_layers_u64 + rl as u64;
-    if ni > u32::MAX as u64 || nj > u32::MAX as u64 || nk > u32::MAX as u64 {
-        return Err(MeshError::TooLarge {
-            nodes: u64::MAX,
-            elements: u64::MAX,
-            limit: grid::MAX_ENTITIES,
-        });
-    }
-    let (ni, nj, nk) = (ni as usize, nj as usize, nk as usize);
-    grid::check_size(ni, nj, nk)?;
-    let n_layers = n_layers_u64 as usize;
-    let nb_cells = p.n_blocks as usize * epb;
-
-    let base = p.base_elevation_m;
-    let dz = lift_height / lpl as f64;
-    let layer_z: Vec<f64> = (0..=n_layers).map(|l| base + l as f64 * dz).collect();
-
-    let margin = p.rock_margin_m;
-    let xs: Vec<f64> = (0..=ni)
-        .map(|i| {
-            if i < m {
-                -margin + margin * i as f64 / m as f64
-            } else if i <= m + nb_cells {
-                (i - m) as f64 * p.block_length_m / epb as f64
-            } else {
-                p.n_blocks as f64 * p.block_length_m + margin * (i - m - nb_cells) as f64 / m as f64
-            }
-        })
-        .collect();
-    let ys: Vec<f64> = (0..=nj)
-        .map(|j| {
-            if j < m {
-                -margin + margin * j as f64 / m as f64
-            } else if j <= m + na {
-                (j - m) as f64 * p.thickness_m / na as f64
-            } else {
-                p.thickness_m + margin * (j - m - na) as f64 / m as f64
-            }
-        })
-        .collect();
-    let zs: Vec<f64> = (0..=nk)
-        .map(|k| {
-            if k < rl {
-                base - p.rock_depth_m + p.rock_depth_m * k as f64 / rl as f64
-            } else {
-                layer_z[k - rl]
-            }
-        })
-        .collect();
-
-    let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * (nk + 1));
+    let length = p.n_blocks as f64 * p.block_length_m;
+    let xs = axis(
+        m,
+        margin,
+        p.n_blocks as usize * epb,
+        p.block_length_m,
+        epb,
+        length,
+    );
+    let ys = axis(m, margin, na, p.thickness_m, na, p.thickness_m);
+    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, layer_z);
+    let mut pos = Vec::with_capacity(xs.len() * ys.len() * zs.len());
     for &z in &zs {
         for &y in &ys {
             for &x in &xs {
@@ -149,37 +111,21 @@ pub fn generate_blocks(
             }
         }
     }
-    let mut cells = Vec::with_capacity(ni * nj * nk);
-    for k in 0..nk {
-        for j in 0..nj {
-            for i in 0..ni {
-                let c = if k < rl {
-                    Cell::Rock
-                } else if i >= m && i < m + nb_cells && j >= m && j < m + na {
-                    Cell::Concrete {
-                        block: ((i - m) / epb) as u32 + 1,
-                        layer: (k - rl) as u32,
-                    }
-                } else {
-                    Cell::Void
-                };
-                cells.push(c);
-            }
-        }
-    }
+    pos
+}
 
-    grid::build(Grid {
-        ni,
-        nj,
-        nk,
-        pos,
-        cells,
-        j0: m,
-        j1: m + na,
-        layer_z,
-        lift_height,
-        zone_lifts,
-        layers_per_lift: p.layers_per_lift,
-        block_layers: vec![(0, p.n_lifts); p.n_blocks as usize],
-    })
+/// Grid lines along x or y: `m` margin cells over `margin` before 0, `n`
+/// cells of `len / per` each, `m` margin cells beyond `end`.
+fn axis(m: usize, margin: f64, n: usize, len: f64, per: usize, end: f64) -> Vec<f64> {
+    (0..=n + 2 * m)
+        .map(|i| {
+            if i < m {
+                -margin + margin * i as f64 / m as f64
+            } else if i <= m + n {
+                (i - m) as f64 * len / per as f64
+            } else {
+                end + margin * (i - m - n) as f64 / m as f64
+            }
+        })
+        .collect()
 }

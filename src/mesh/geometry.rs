@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::MeshError;
+
 /// Which generator builds the mesh.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -16,9 +18,9 @@ pub enum Geometry {
 pub struct BlocksGeometry {
     /// Number of blocks (≥ 1); joints = blocks − 1.
     pub n_blocks: u32,
-    /// Length of each block along the axis (x) [m].
+    /// Length of each block along the axis (x) \[m\].
     pub block_length_m: f64,
-    /// Thickness of the blocks in the stream direction (y) [m].
+    /// Thickness of the blocks in the stream direction (y) \[m\].
     pub thickness_m: f64,
     /// Number of lifts of every block.
     pub n_lifts: u32,
@@ -29,20 +31,20 @@ pub struct BlocksGeometry {
     /// Element layers per lift (1 = one layer per lift).
     #[serde(default = "one")]
     pub layers_per_lift: u32,
-    /// Rock depth under the blocks [m]; 0 = no rock (blocks on a rigid/adiabatic base).
+    /// Rock depth under the blocks \[m\]; 0 = no rock (blocks on a rigid/adiabatic base).
     #[serde(default)]
     pub rock_depth_m: f64,
     /// Rock element layers.
     #[serde(default = "one")]
     pub rock_layers: u32,
-    /// Rock margin beyond the blocks on every side [m] (0 = rock only under the blocks);
+    /// Rock margin beyond the blocks on every side \[m\] (0 = rock only under the blocks);
     /// needs `rock_depth_m > 0`. The margin's top is at the base elevation.
     #[serde(default)]
     pub rock_margin_m: f64,
     /// Rock elements across each margin (used when `rock_margin_m > 0`).
     #[serde(default = "one")]
     pub rock_margin_elements: u32,
-    /// Elevation of the block bases [m].
+    /// Elevation of the block bases \[m\].
     #[serde(default)]
     pub base_elevation_m: f64,
 }
@@ -53,25 +55,25 @@ pub struct BlocksGeometry {
 pub struct ArchGeometry {
     /// Number of blocks (≥ 2), numbered from the left bank.
     pub n_blocks: u32,
-    /// Structural height from the deepest foundation to the crest [m].
+    /// Structural height from the deepest foundation to the crest \[m\].
     pub height_m: f64,
-    /// Elevation of the deepest foundation [m].
+    /// Elevation of the deepest foundation \[m\].
     #[serde(default)]
     pub base_elevation_m: f64,
-    /// Radius of the upstream face at the crest [m].
+    /// Radius of the upstream face at the crest \[m\].
     pub crest_radius_m: f64,
-    /// Radius of the upstream face at the base [m] (smaller: plan curvature grows with depth).
+    /// Radius of the upstream face at the base \[m\] (smaller: plan curvature grows with depth).
     pub base_radius_m: f64,
-    /// Central angle of the crest arch [degrees].
+    /// Central angle of the crest arch \[degrees\].
     pub central_angle_deg: f64,
-    /// Crest thickness [m].
+    /// Crest thickness \[m\].
     pub crest_thickness_m: f64,
-    /// Base thickness at the crown [m].
+    /// Base thickness at the crown \[m\].
     pub base_thickness_m: f64,
     /// Exponent of the thickness law t(z) = t_c + (t_b − t_c)·((H − z)/H)^k.
     #[serde(default = "one_f")]
     pub thickness_exponent: f64,
-    /// Crown-cantilever overhang: largest upstream offset of the upstream face [m]
+    /// Crown-cantilever overhang: largest upstream offset of the upstream face \[m\]
     /// (reached at 2/3 of the height; zero at base and crest for the default shape).
     #[serde(default)]
     pub overhang_m: f64,
@@ -88,12 +90,12 @@ pub struct ArchGeometry {
     pub elements_per_block: u32,
     /// Elements across the thickness.
     pub elements_across: u32,
-    /// Rock depth below the deepest foundation [m].
+    /// Rock depth below the deepest foundation \[m\].
     pub rock_depth_m: f64,
     /// Rock element layers below the deepest foundation.
     #[serde(default = "two")]
     pub rock_layers: u32,
-    /// Rock margin upstream, downstream and beyond the abutments [m].
+    /// Rock margin upstream, downstream and beyond the abutments \[m\].
     pub rock_margin_m: f64,
     /// Rock elements across each margin.
     #[serde(default = "one")]
@@ -114,4 +116,32 @@ fn two_f() -> f64 {
 }
 fn min_block_fraction() -> f64 {
     0.3
+}
+
+/// `Err` naming `name` unless `ok`; the message is built only then.
+pub(crate) fn check(ok: bool, name: &str, msg: impl FnOnce() -> String) -> Result<(), MeshError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(MeshError::param(name, msg()))
+    }
+}
+
+/// `name must be > 0, got v` unless v is finite and positive.
+pub(crate) fn positive(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v > 0.0, name, || {
+        format!("must be > 0, got {v}")
+    })
+}
+
+/// `name must be >= 0, got v` unless v is finite and not negative.
+pub(crate) fn non_negative(name: &str, v: f64) -> Result<(), MeshError> {
+    check(v.is_finite() && v >= 0.0, name, || {
+        format!("must be >= 0, got {v}")
+    })
+}
+
+/// `name must be >= min, got v` for a count below `min`.
+pub(crate) fn at_least(name: &str, v: u32, min: u32) -> Result<(), MeshError> {
+    check(v >= min, name, || format!("must be >= {min}, got {v}"))
 }

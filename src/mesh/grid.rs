@@ -1,13 +1,18 @@
 //! Shared builder: a structured logical grid of classified cells → [`Mesh`].
 //!
+//! Both generators describe their grid as a [`BlockRow`] (cell counts: a row
+//! of blocks inside a rock margin on rock layers) and hand over the node
+//! positions and the concrete [`Layers`]; the row classifies every cell.
 //! Node (i, j, k) has index `i + (ni+1)·(j + (nj+1)·k)`, cell (i, j, k)
 //! `i + ni·(j + nj·k)`. Cells are void, rock, or concrete of (block, global
 //! layer). Joint duplication, face pairs, zones, zone points, surfaces and
-//! thermal dofs all follow from the classification (see the module docs of
-//! [`super`]).
+//! thermal dofs all follow from the classification, one step each (see the
+//! module docs of [`super`]).
 
 use std::collections::HashMap;
 use std::sync::OnceLock;
+
+use crate::fem::quad4;
 
 use crate::vocab::ZonePoint;
 
@@ -17,33 +22,60 @@ use super::{BlockInfo, FacePair, Mesh, MeshError, Part, SurfaceFace, SurfaceKind
 pub(crate) const MAX_ENTITIES: u64 = u32::MAX as u64 / 2;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Cell {
+enum Cell {
     Void,
     Rock,
     Concrete { block: u32, layer: u32 },
 }
 
-pub(crate) struct Grid {
-    pub ni: usize,
-    pub nj: usize,
-    pub nk: usize,
-    /// Node positions, `(ni+1)(nj+1)(nk+1)`.
-    pub pos: Vec<[f64; 3]>,
-    /// Cell classes, `ni·nj·nk`.
-    pub cells: Vec<Cell>,
-    /// Concrete cells across are `j ∈ [j0, j1)`; cells with `j < j0` are upstream.
-    pub j0: usize,
-    pub j1: usize,
-    pub layer_z: Vec<f64>,
+/// The logical grid both generators lay out: a row of `n_blocks` blocks along
+/// i (`elements_per_block` cells each), `elements_across` cells thick along
+/// j, inside `margin` cells of rock on every side, on `rock_layers` layers of
+/// rock with `layers` concrete layers above them along k.
+pub(crate) struct BlockRow {
+    pub n_blocks: u32,
+    pub elements_per_block: u32,
+    pub elements_across: u32,
+    /// Cells beyond the blocks on every side (0: no margin).
+    pub margin: usize,
+    /// Rock cell layers below the lowest concrete layer.
+    pub rock_layers: usize,
+    /// Concrete element layers of the dam.
+    pub layers: u64,
+    /// Rock fills the margins beyond the abutments up to the crest (the arch's
+    /// valley sides); without it they are rock only below the concrete.
+    pub rock_beyond_abutments: bool,
+}
+
+/// The concrete layers and lifts a generator chose for its [`BlockRow`].
+pub(crate) struct Layers {
+    /// Elevations of the concrete layer boundaries, `layers + 1` of them.
+    pub z: Vec<f64>,
     pub lift_height: f64,
     pub zone_lifts: u32,
-    pub layers_per_lift: u32,
-    /// Per block (index block − 1): (base_layer, n_lifts).
-    pub block_layers: Vec<(u32, u32)>,
+    pub per_lift: u32,
+    /// Per block (index block − 1): (base layer, lifts). Rock fills the
+    /// block's column below its base layer.
+    pub blocks: Vec<(u32, u32)>,
+}
+
+/// A classified logical grid: what [`build`] turns into a mesh.
+struct Grid {
+    ni: usize,
+    nj: usize,
+    nk: usize,
+    /// Node positions, `(ni+1)(nj+1)(nk+1)`.
+    pos: Vec<[f64; 3]>,
+    /// Cell classes, `ni·nj·nk`.
+    cells: Vec<Cell>,
+    /// Concrete cells across are `j ∈ [j0, j1)`; cells with `j < j0` are upstream.
+    j0: usize,
+    j1: usize,
+    layers: Layers,
 }
 
 /// Check that a grid of this size can be indexed; call before allocating it.
-pub(crate) fn check_size(ni: usize, nj: usize, nk: usize) -> Result<(), MeshError> {
+fn check_size(ni: usize, nj: usize, nk: usize) -> Result<(), MeshError> {
     let nodes = (ni as u64 + 1)
         .saturating_mul(nj as u64 + 1)
         .saturating_mul(nk as u64 + 1);
@@ -59,6 +91,169 @@ pub(crate) fn check_size(ni: usize, nj: usize, nk: usize) -> Result<(), MeshErro
         });
     }
     Ok(())
+}
+
+/// An inconsistency the generators must never produce.
+fn bug(m: String) -> MeshError {
+    MeshError::Invalid(format!("generator: {m}"))
+}
+
+impl BlockRow {
+    /// Cells along i, j and k; checked before anything of that size is
+    /// allocated (a count beyond `u32`, or more nodes or elements than
+    /// [`MAX_ENTITIES`], is [`MeshError::TooLarge`]).
+    pub fn size(&self) -> Result<(usize, usize, usize), MeshError> {
+        let m = self.margin as u64;
+        let ni = (self.n_blocks as u64)
+            .saturating_mul(self.elements_per_block as u64)
+            .saturating_add(2 * m);
+        let nj = self.elements_across as u64 + 2 * m;
+        let nk = self.layers.saturating_add(self.rock_layers as u64);
+        if [ni, nj, nk].iter().any(|&s| s > u32::MAX as u64) {
+            return Err(MeshError::TooLarge {
+                nodes: u64::MAX,
+                elements: u64::MAX,
+                limit: MAX_ENTITIES,
+            });
+        }
+        let (ni, nj, nk) = (ni as usize, nj as usize, nk as usize);
+        check_size(ni, nj, nk)?;
+        Ok((ni, nj, nk))
+    }
+
+    /// Elevations of the logical levels k: `rock_layers` equal layers over
+    /// `rock_depth` below `base`, then the concrete layer boundaries `layer_z`.
+    pub fn level_z(&self, base: f64, rock_depth: f64, layer_z: &[f64]) -> Vec<f64> {
+        let rl = self.rock_layers;
+        (0..rl + layer_z.len())
+            .map(|k| {
+                if k < rl {
+                    base - rock_depth + rock_depth * k as f64 / rl as f64
+                } else {
+                    layer_z[k - rl]
+                }
+            })
+            .collect()
+    }
+
+    /// What cell (i, j, k) is made of: rock below the concrete layers and
+    /// under each block's base layer, concrete of the block in the columns
+    /// across the dam, void elsewhere (and beyond the abutments unless
+    /// [`BlockRow::rock_beyond_abutments`]).
+    fn cell(&self, i: usize, j: usize, k: usize, blocks: &[(u32, u32)]) -> Cell {
+        let (m, rl) = (self.margin, self.rock_layers);
+        let epb = self.elements_per_block as usize;
+        if k < rl {
+            return Cell::Rock;
+        }
+        if i < m || i >= m + self.n_blocks as usize * epb {
+            return if self.rock_beyond_abutments {
+                Cell::Rock
+            } else {
+                Cell::Void
+            };
+        }
+        let layer = (k - rl) as u32;
+        let b = (i - m) / epb;
+        if layer < blocks[b].0 {
+            Cell::Rock
+        } else if j >= m && j < m + self.elements_across as usize {
+            Cell::Concrete {
+                block: b as u32 + 1,
+                layer,
+            }
+        } else {
+            Cell::Void
+        }
+    }
+
+    /// Classify the cells and build the validated mesh on the node positions
+    /// `pos` (`(ni+1)(nj+1)(nk+1)`, i fastest, then j, then k).
+    pub fn build(&self, pos: Vec<[f64; 3]>, layers: Layers) -> Result<Mesh, MeshError> {
+        let (ni, nj, nk) = self.size()?;
+        let mut cells = Vec::with_capacity(ni * nj * nk);
+        for k in 0..nk {
+            for j in 0..nj {
+                for i in 0..ni {
+                    cells.push(self.cell(i, j, k, &layers.blocks));
+                }
+            }
+        }
+        build(Grid {
+            ni,
+            nj,
+            nk,
+            pos,
+            cells,
+            j0: self.margin,
+            j1: self.margin + self.elements_across as usize,
+            layers,
+        })
+    }
+}
+
+/// Which logical nodes become mesh nodes, and which of them get two copies.
+struct NodeClasses {
+    used: Vec<bool>,
+    dup: Vec<bool>,
+}
+
+/// Mesh nodes of the used logical nodes: copy A of each, copy B of the joint
+/// nodes, both copies on one thermal dof.
+struct Numbering {
+    id_a: Vec<u32>,
+    id_b: Vec<u32>,
+    nodes: Vec<[f64; 3]>,
+    thermal_dof: Vec<u32>,
+    n_dofs: u32,
+}
+
+/// One hex element per non-void cell, in cell order.
+struct Elements {
+    elements: Vec<[u32; 8]>,
+    parts: Vec<Part>,
+    /// Cell → element (`u32::MAX` for void cells).
+    cell_elem: Vec<u32>,
+}
+
+/// Face pair of (joint, global layer, cell across j), for the zone points.
+type PairAt = HashMap<(u32, u32, usize), u32>;
+
+/// Build the mesh and validate it. Each step reads the cell classes and what
+/// the steps before it made: nodes, elements, face pairs, zones and their
+/// points, surfaces.
+fn build(g: Grid) -> Result<Mesh, MeshError> {
+    debug_assert_eq!(g.pos.len(), (g.ni + 1) * (g.nj + 1) * (g.nk + 1));
+    debug_assert_eq!(g.cells.len(), g.ni * g.nj * g.nk);
+    let numbering = g.number_nodes(&g.classify_nodes()?);
+    let el = g.elements(&numbering)?;
+    let (face_pairs, pair_at) = g.face_pairs(&el)?;
+    let zones = g.zones(&face_pairs);
+    let zone_points = g.zone_points(&zones, &face_pairs, &pair_at, &numbering.nodes)?;
+    let surfaces = g.surfaces(&el.cell_elem);
+    let blocks = g.block_infos();
+    let layers = g.layers;
+    let mesh = Mesh {
+        nodes: numbering.nodes,
+        elements: el.elements,
+        parts: el.parts,
+        thermal_dof: numbering.thermal_dof,
+        n_thermal_dofs: numbering.n_dofs as usize,
+        crest_z: *layers.z.last().unwrap_or(&0.0),
+        layer_z: layers.z,
+        lift_height: layers.lift_height,
+        zone_lifts: layers.zone_lifts,
+        layers_per_lift: layers.per_lift,
+        blocks,
+        face_pairs,
+        zones,
+        zone_points,
+        surfaces,
+        upstream_normal_hint: [0.0, -1.0, 0.0],
+        index: OnceLock::new(),
+    };
+    mesh.validate()?;
+    Ok(mesh)
 }
 
 impl Grid {
@@ -86,351 +281,398 @@ impl Grid {
             && (j as usize) < self.nj
             && (k as usize) < self.nk
     }
-}
+    /// Global layers per zone.
+    fn zone_layers(&self) -> usize {
+        (self.layers.zone_lifts as u64 * self.layers.per_lift as u64).min(u32::MAX as u64) as usize
+    }
+    /// Global layers `[first, end)` of zone `zone` (1-based), clipped at the crest.
+    fn zone_band(&self, zone: u32) -> (usize, usize) {
+        let zone_layers = self.zone_layers();
+        let n_layers = self.layers.z.len() - 1;
+        let first = (zone as usize - 1) * zone_layers;
+        (first, (zone as usize * zone_layers).min(n_layers))
+    }
 
-/// Build the mesh and validate it.
-pub(crate) fn build(g: Grid) -> Result<Mesh, MeshError> {
-    let bug = |m: String| MeshError::Invalid(format!("generator: {m}"));
-    let (ni, nj, nk) = (g.ni, g.nj, g.nk);
-    let nn = (ni + 1) * (nj + 1) * (nk + 1);
-    debug_assert_eq!(g.pos.len(), nn);
-    debug_assert_eq!(g.cells.len(), ni * nj * nk);
-    let n_layers = g.layer_z.len() - 1;
-    let lpl = g.layers_per_lift;
-
-    // 1. Node classification: used, duplicated (joint node away from rock).
-    let mut used = vec![false; nn];
-    let mut dup = vec![false; nn];
-    for k in 0..=nk {
-        for j in 0..=nj {
-            for i in 0..=ni {
-                let n = g.node(i, j, k);
-                let mut any = false;
-                let mut rock = false;
-                let mut left: Option<u32> = None;
-                let mut right: Option<u32> = None;
-                for dk in 0..2isize {
-                    for dj in 0..2isize {
-                        for di in 0..2isize {
-                            let c = g.cell(
-                                i as isize - 1 + di,
-                                j as isize - 1 + dj,
-                                k as isize - 1 + dk,
-                            );
-                            match c {
-                                Cell::Void => {}
-                                Cell::Rock => {
-                                    any = true;
-                                    rock = true;
-                                }
-                                Cell::Concrete { block, .. } => {
-                                    any = true;
-                                    let side = if di == 0 { &mut left } else { &mut right };
-                                    match *side {
-                                        None => *side = Some(block),
-                                        Some(b) if b == block => {}
-                                        Some(_) => {
-                                            return Err(bug(format!(
-                                                "two blocks on one side of node ({i},{j},{k})"
-                                            )))
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
-                used[n] = any;
-                if let (Some(l), Some(r)) = (left, right) {
-                    if l != r {
-                        if r != l + 1 {
-                            return Err(bug(format!(
-                                "blocks {l} and {r} meet at node ({i},{j},{k})"
-                            )));
-                        }
-                        dup[n] = !rock;
-                    }
+    /// Step 1: every node a non-void cell touches is used; a node where two
+    /// blocks meet away from rock is a joint node and gets two copies.
+    fn classify_nodes(&self) -> Result<NodeClasses, MeshError> {
+        let nn = (self.ni + 1) * (self.nj + 1) * (self.nk + 1);
+        let mut used = vec![false; nn];
+        let mut dup = vec![false; nn];
+        for k in 0..=self.nk {
+            for j in 0..=self.nj {
+                for i in 0..=self.ni {
+                    let n = self.node(i, j, k);
+                    (used[n], dup[n]) = self.node_class(i, j, k)?;
                 }
             }
         }
+        Ok(NodeClasses { used, dup })
     }
 
-    // 2. Mesh nodes and thermal dofs.
-    let mut id_a = vec![u32::MAX; nn];
-    let mut id_b = vec![u32::MAX; nn];
-    let mut nodes = Vec::new();
-    let mut thermal_dof = Vec::new();
-    let mut n_dofs: u32 = 0;
-    for n in 0..nn {
-        if !used[n] {
-            continue;
-        }
-        id_a[n] = nodes.len() as u32;
-        nodes.push(g.pos[n]);
-        thermal_dof.push(n_dofs);
-        id_b[n] = id_a[n];
-        if dup[n] {
-            id_b[n] = nodes.len() as u32;
-            nodes.push(g.pos[n]);
-            thermal_dof.push(n_dofs);
-        }
-        n_dofs += 1;
-    }
-
-    // 3. Elements and parts.
-    let mut elements: Vec<[u32; 8]> = Vec::new();
-    let mut parts: Vec<Part> = Vec::new();
-    let mut cell_elem = vec![u32::MAX; ni * nj * nk];
-    for k in 0..nk {
-        for j in 0..nj {
-            for i in 0..ni {
-                let c = g.cells[g.cell_index(i, j, k)];
-                let part = match c {
-                    Cell::Void => continue,
-                    Cell::Rock => Part::Rock,
-                    Cell::Concrete { block, layer } => {
-                        let (base, n_lifts) = *g
-                            .block_layers
-                            .get((block as usize).wrapping_sub(1))
-                            .ok_or_else(|| bug(format!("unknown block {block}")))?;
-                        if layer < base || (layer - base) / lpl >= n_lifts {
-                            return Err(bug(format!("layer {layer} outside block {block}")));
-                        }
-                        Part::Concrete {
-                            block,
-                            lift: (layer - base) / lpl + 1,
-                        }
-                    }
-                };
-                // corners in VTK order; nodes on the cell's low-i side use copy B
-                let corner = |di: usize, dj: usize, dk: usize| {
-                    let n = g.node(i + di, j + dj, k + dk);
-                    if di == 0 {
-                        id_b[n]
-                    } else {
-                        id_a[n]
-                    }
-                };
-                cell_elem[g.cell_index(i, j, k)] = elements.len() as u32;
-                elements.push([
-                    corner(0, 0, 0),
-                    corner(1, 0, 0),
-                    corner(1, 1, 0),
-                    corner(0, 1, 0),
-                    corner(0, 0, 1),
-                    corner(1, 0, 1),
-                    corner(1, 1, 1),
-                    corner(0, 1, 1),
-                ]);
-                parts.push(part);
-            }
-        }
-    }
-
-    // 4. Face pairs, sorted by (joint, layer, j).
-    let zone_layers = (g.zone_lifts as u64 * lpl as u64).min(u32::MAX as u64) as usize;
-    let mut keyed: Vec<(u32, u32, usize, u32, u32)> = Vec::new(); // joint, layer, j, ea, eb
-    for k in 0..nk {
-        for j in 0..nj {
-            for i in 1..ni {
-                let l = g.cells[g.cell_index(i - 1, j, k)];
-                let r = g.cells[g.cell_index(i, j, k)];
-                if let (
-                    Cell::Concrete { block: bl, layer },
-                    Cell::Concrete {
-                        block: br,
-                        layer: lr,
-                    },
-                ) = (l, r)
-                {
-                    if bl == br {
-                        continue;
-                    }
-                    if br != bl + 1 || layer != lr {
-                        return Err(bug(format!("bad joint face at cell ({i},{j},{k})")));
-                    }
-                    keyed.push((
-                        bl,
-                        layer,
-                        j,
-                        cell_elem[g.cell_index(i - 1, j, k)],
-                        cell_elem[g.cell_index(i, j, k)],
-                    ));
-                }
-            }
-        }
-    }
-    keyed.sort_unstable_by_key(|x| (x.0, x.1, x.2));
-    let mut face_pairs = Vec::with_capacity(keyed.len());
-    let mut pair_at: HashMap<(u32, u32, usize), u32> = HashMap::new();
-    for &(joint, layer, j, ea, eb) in &keyed {
-        let a = elements[ea as usize];
-        let b = elements[eb as usize];
-        pair_at.insert((joint, layer, j), face_pairs.len() as u32);
-        face_pairs.push(FacePair {
-            joint,
-            zone: layer / zone_layers as u32 + 1,
-            layer,
-            elem_a: ea,
-            elem_b: eb,
-            nodes_a: [a[1], a[2], a[6], a[5]],
-            nodes_b: [b[0], b[3], b[7], b[4]],
-        });
-    }
-
-    // 5. Zones and zone points.
-    let mut zones: Vec<Zone> = Vec::new();
-    for (p, fp) in face_pairs.iter().enumerate() {
-        match zones.last_mut() {
-            Some(z) if z.joint == fp.joint && z.zone == fp.zone => z.pairs.push(p as u32),
-            _ => {
-                let first = (fp.zone as usize - 1) * zone_layers;
-                let end = (fp.zone as usize * zone_layers).min(n_layers);
-                zones.push(Zone {
-                    joint: fp.joint,
-                    zone: fp.zone,
-                    z_bottom: g.layer_z[first],
-                    z_top: g.layer_z[end],
-                    pairs: vec![p as u32],
-                });
-            }
-        }
-    }
-    let n_across = g.j1 - g.j0;
-    let mut zone_points = Vec::with_capacity(zones.len() * 3);
-    for z in &zones {
-        let zm = 0.5 * (z.z_bottom + z.z_top);
-        let first = (z.zone as usize - 1) * zone_layers;
-        let end = (z.zone as usize * zone_layers).min(n_layers);
-        let scale = 1e-12 * (1.0 + zm.abs());
-        let layer = (first..end)
-            .find(|&l| g.layer_z[l + 1] >= zm - scale)
-            .unwrap_or(end - 1);
-        let (z0, z1) = (g.layer_z[layer], g.layer_z[layer + 1]);
-        let t = (2.0 * (zm - z0) / (z1 - z0) - 1.0).clamp(-1.0, 1.0);
-        let center = if n_across % 2 == 1 {
-            (g.j0 + n_across / 2, 0.0)
-        } else {
-            (g.j0 + n_across / 2 - 1, 1.0)
-        };
-        for (point, (j, s)) in [
-            (ZonePoint::Upstream, (g.j0, -1.0)),
-            (ZonePoint::Center, center),
-            (ZonePoint::Downstream, (g.j1 - 1, 1.0)),
-        ] {
-            let pair = *pair_at.get(&(z.joint, layer as u32, j)).ok_or_else(|| {
-                bug(format!(
-                    "no face pair for joint {} zone {} at layer {layer}, across {j}",
-                    z.joint, z.zone
-                ))
-            })?;
-            let fp = &face_pairs[pair as usize];
-            let w = super::quad_shape(s, t);
-            let mut xyz = [0.0; 3];
-            for (q, &node) in fp.nodes_a.iter().enumerate() {
-                for c in 0..3 {
-                    xyz[c] += w[q] * nodes[node as usize][c];
-                }
-            }
-            zone_points.push(ZoneSite {
-                joint: z.joint,
-                zone: z.zone,
-                point,
-                pair,
-                s,
-                t,
-                xyz,
-            });
-        }
-    }
-
-    // 6. Surfaces.
-    const DIRS: [(isize, isize, isize); 6] = [
-        (0, 0, -1),
-        (0, 0, 1),
-        (0, -1, 0),
-        (1, 0, 0),
-        (0, 1, 0),
-        (-1, 0, 0),
-    ];
-    let mut surfaces = Vec::new();
-    for k in 0..nk {
-        for j in 0..nj {
-            for i in 0..ni {
-                let c = g.cells[g.cell_index(i, j, k)];
-                if c == Cell::Void {
-                    continue;
-                }
-                let elem = cell_elem[g.cell_index(i, j, k)];
-                for (face, &(di, dj, dk)) in DIRS.iter().enumerate() {
-                    let (a, b, cc) = (i as isize + di, j as isize + dj, k as isize + dk);
-                    if g.cell(a, b, cc) != Cell::Void {
-                        continue;
-                    }
-                    let outside = !g.inside(a, b, cc);
-                    let kind = match c {
+    /// (used, duplicated) of node (i, j, k) from its eight cells. The cells on
+    /// its low-i side must belong to one block, those on its high-i side to
+    /// that block or the next.
+    fn node_class(&self, i: usize, j: usize, k: usize) -> Result<(bool, bool), MeshError> {
+        let mut any = false;
+        let mut rock = false;
+        let mut left: Option<u32> = None;
+        let mut right: Option<u32> = None;
+        for dk in 0..2isize {
+            for dj in 0..2isize {
+                for di in 0..2isize {
+                    let c = self.cell(
+                        i as isize - 1 + di,
+                        j as isize - 1 + dj,
+                        k as isize - 1 + dk,
+                    );
+                    match c {
+                        Cell::Void => {}
                         Cell::Rock => {
-                            if outside && face != 1 {
-                                SurfaceKind::Far
-                            } else if j < g.j0 {
-                                SurfaceKind::Wet
-                            } else {
-                                SurfaceKind::Ground
+                            any = true;
+                            rock = true;
+                        }
+                        Cell::Concrete { block, .. } => {
+                            any = true;
+                            let side = if di == 0 { &mut left } else { &mut right };
+                            match *side {
+                                None => *side = Some(block),
+                                Some(b) if b == block => {}
+                                Some(_) => {
+                                    return Err(bug(format!(
+                                        "two blocks on one side of node ({i},{j},{k})"
+                                    )))
+                                }
                             }
                         }
-                        _ => {
-                            if outside && face == 0 {
-                                SurfaceKind::Far
-                            } else if face == 2 {
-                                SurfaceKind::Wet
-                            } else {
-                                SurfaceKind::Ground
-                            }
+                    }
+                }
+            }
+        }
+        let mut dup = false;
+        if let (Some(l), Some(r)) = (left, right) {
+            if l != r {
+                if r != l + 1 {
+                    return Err(bug(format!(
+                        "blocks {l} and {r} meet at node ({i},{j},{k})"
+                    )));
+                }
+                dup = !rock;
+            }
+        }
+        Ok((any, dup))
+    }
+
+    /// Step 2: mesh nodes in logical order, copy B right after copy A.
+    fn number_nodes(&self, classes: &NodeClasses) -> Numbering {
+        let nn = classes.used.len();
+        let mut id_a = vec![u32::MAX; nn];
+        let mut id_b = vec![u32::MAX; nn];
+        let mut nodes = Vec::new();
+        let mut thermal_dof = Vec::new();
+        let mut n_dofs: u32 = 0;
+        for n in 0..nn {
+            if !classes.used[n] {
+                continue;
+            }
+            id_a[n] = nodes.len() as u32;
+            nodes.push(self.pos[n]);
+            thermal_dof.push(n_dofs);
+            id_b[n] = id_a[n];
+            if classes.dup[n] {
+                id_b[n] = nodes.len() as u32;
+                nodes.push(self.pos[n]);
+                thermal_dof.push(n_dofs);
+            }
+            n_dofs += 1;
+        }
+        Numbering {
+            id_a,
+            id_b,
+            nodes,
+            thermal_dof,
+            n_dofs,
+        }
+    }
+
+    /// Step 3: one hex per non-void cell, corners in VTK order; the corners on
+    /// the cell's low-i side take copy B, so block j + 1 sits on the copies.
+    fn elements(&self, ids: &Numbering) -> Result<Elements, MeshError> {
+        let mut elements: Vec<[u32; 8]> = Vec::new();
+        let mut parts: Vec<Part> = Vec::new();
+        let mut cell_elem = vec![u32::MAX; self.ni * self.nj * self.nk];
+        for k in 0..self.nk {
+            for j in 0..self.nj {
+                for i in 0..self.ni {
+                    let Some(part) = self.part(self.cells[self.cell_index(i, j, k)])? else {
+                        continue;
+                    };
+                    let corner = |di: usize, dj: usize, dk: usize| {
+                        let n = self.node(i + di, j + dj, k + dk);
+                        if di == 0 {
+                            ids.id_b[n]
+                        } else {
+                            ids.id_a[n]
                         }
                     };
-                    surfaces.push(SurfaceFace {
-                        elem,
-                        face: face as u8,
-                        kind,
+                    cell_elem[self.cell_index(i, j, k)] = elements.len() as u32;
+                    elements.push([
+                        corner(0, 0, 0),
+                        corner(1, 0, 0),
+                        corner(1, 1, 0),
+                        corner(0, 1, 0),
+                        corner(0, 0, 1),
+                        corner(1, 0, 1),
+                        corner(1, 1, 1),
+                        corner(0, 1, 1),
+                    ]);
+                    parts.push(part);
+                }
+            }
+        }
+        Ok(Elements {
+            elements,
+            parts,
+            cell_elem,
+        })
+    }
+
+    /// The part of a cell's element (`None` for void); a concrete layer's
+    /// lift counts from its block's base layer.
+    fn part(&self, c: Cell) -> Result<Option<Part>, MeshError> {
+        Ok(match c {
+            Cell::Void => None,
+            Cell::Rock => Some(Part::Rock),
+            Cell::Concrete { block, layer } => {
+                let lpl = self.layers.per_lift;
+                let (base, n_lifts) = *self
+                    .layers
+                    .blocks
+                    .get((block as usize).wrapping_sub(1))
+                    .ok_or_else(|| bug(format!("unknown block {block}")))?;
+                if layer < base || (layer - base) / lpl >= n_lifts {
+                    return Err(bug(format!("layer {layer} outside block {block}")));
+                }
+                Some(Part::Concrete {
+                    block,
+                    lift: (layer - base) / lpl + 1,
+                })
+            }
+        })
+    }
+
+    /// Step 4: a face pair wherever concrete cells of two neighbouring blocks
+    /// touch along i, sorted by (joint, layer, j).
+    fn face_pairs(&self, el: &Elements) -> Result<(Vec<FacePair>, PairAt), MeshError> {
+        let zone_layers = self.zone_layers();
+        let mut keyed: Vec<(u32, u32, usize, u32, u32)> = Vec::new(); // joint, layer, j, ea, eb
+        for k in 0..self.nk {
+            for j in 0..self.nj {
+                for i in 1..self.ni {
+                    let l = self.cells[self.cell_index(i - 1, j, k)];
+                    let r = self.cells[self.cell_index(i, j, k)];
+                    if let (
+                        Cell::Concrete { block: bl, layer },
+                        Cell::Concrete {
+                            block: br,
+                            layer: lr,
+                        },
+                    ) = (l, r)
+                    {
+                        if bl == br {
+                            continue;
+                        }
+                        if br != bl + 1 || layer != lr {
+                            return Err(bug(format!("bad joint face at cell ({i},{j},{k})")));
+                        }
+                        keyed.push((
+                            bl,
+                            layer,
+                            j,
+                            el.cell_elem[self.cell_index(i - 1, j, k)],
+                            el.cell_elem[self.cell_index(i, j, k)],
+                        ));
+                    }
+                }
+            }
+        }
+        keyed.sort_unstable_by_key(|x| (x.0, x.1, x.2));
+        let mut face_pairs = Vec::with_capacity(keyed.len());
+        let mut pair_at: PairAt = HashMap::new();
+        for &(joint, layer, j, ea, eb) in &keyed {
+            let a = el.elements[ea as usize];
+            let b = el.elements[eb as usize];
+            pair_at.insert((joint, layer, j), face_pairs.len() as u32);
+            face_pairs.push(FacePair {
+                joint,
+                zone: layer / zone_layers as u32 + 1,
+                layer,
+                elem_a: ea,
+                elem_b: eb,
+                nodes_a: [a[1], a[2], a[6], a[5]],
+                nodes_b: [b[0], b[3], b[7], b[4]],
+            });
+        }
+        Ok((face_pairs, pair_at))
+    }
+
+    /// Step 5: a zone per run of face pairs of one (joint, zone), its
+    /// elevations those of the whole band.
+    fn zones(&self, face_pairs: &[FacePair]) -> Vec<Zone> {
+        let mut zones: Vec<Zone> = Vec::new();
+        for (p, fp) in face_pairs.iter().enumerate() {
+            match zones.last_mut() {
+                Some(z) if z.joint == fp.joint && z.zone == fp.zone => z.pairs.push(p as u32),
+                _ => {
+                    let (first, end) = self.zone_band(fp.zone);
+                    zones.push(Zone {
+                        joint: fp.joint,
+                        zone: fp.zone,
+                        z_bottom: self.layers.z[first],
+                        z_top: self.layers.z[end],
+                        pairs: vec![p as u32],
                     });
                 }
             }
         }
+        zones
     }
 
-    let blocks = g
-        .block_layers
-        .iter()
-        .enumerate()
-        .map(|(b, &(base, n_lifts))| BlockInfo {
-            block: b as u32 + 1,
-            n_lifts,
-            base_layer: base,
-            foundation_z: g.layer_z[base as usize],
-        })
-        .collect();
+    /// Step 6: the upstream, centre and downstream point of every zone at its
+    /// mid height, on the face pair that holds it (see the module docs of
+    /// [`super`] for which pair gets a point on an element edge).
+    fn zone_points(
+        &self,
+        zones: &[Zone],
+        face_pairs: &[FacePair],
+        pair_at: &PairAt,
+        nodes: &[[f64; 3]],
+    ) -> Result<Vec<ZoneSite>, MeshError> {
+        let n_across = self.j1 - self.j0;
+        let center = if n_across % 2 == 1 {
+            (self.j0 + n_across / 2, 0.0)
+        } else {
+            (self.j0 + n_across / 2 - 1, 1.0)
+        };
+        let mut zone_points = Vec::with_capacity(zones.len() * 3);
+        for z in zones {
+            let (layer, t) = self.mid_height(z);
+            for (point, (j, s)) in [
+                (ZonePoint::Upstream, (self.j0, -1.0)),
+                (ZonePoint::Center, center),
+                (ZonePoint::Downstream, (self.j1 - 1, 1.0)),
+            ] {
+                let pair = *pair_at.get(&(z.joint, layer as u32, j)).ok_or_else(|| {
+                    bug(format!(
+                        "no face pair for joint {} zone {} at layer {layer}, across {j}",
+                        z.joint, z.zone
+                    ))
+                })?;
+                let corners = face_pairs[pair as usize].nodes_a.map(|n| nodes[n as usize]);
+                zone_points.push(ZoneSite {
+                    joint: z.joint,
+                    zone: z.zone,
+                    point,
+                    pair,
+                    s,
+                    t,
+                    xyz: quad4::point(&corners, [s, t]),
+                });
+            }
+        }
+        Ok(zone_points)
+    }
 
-    let mesh = Mesh {
-        nodes,
-        elements,
-        parts,
-        thermal_dof,
-        n_thermal_dofs: n_dofs as usize,
-        crest_z: *g.layer_z.last().unwrap_or(&0.0),
-        layer_z: g.layer_z,
-        lift_height: g.lift_height,
-        zone_lifts: g.zone_lifts,
-        layers_per_lift: lpl,
-        blocks,
-        face_pairs,
-        zones,
-        zone_points,
-        surfaces,
-        upstream_normal_hint: [0.0, -1.0, 0.0],
-        index: OnceLock::new(),
-    };
-    mesh.validate()?;
-    Ok(mesh)
+    /// The layer holding a zone's mid height (the lower one when it falls on a
+    /// layer boundary) and the height there as t ∈ [−1, 1].
+    fn mid_height(&self, z: &Zone) -> (usize, f64) {
+        let zm = 0.5 * (z.z_bottom + z.z_top);
+        let (first, end) = self.zone_band(z.zone);
+        let scale = 1e-12 * (1.0 + zm.abs());
+        let layer_z = &self.layers.z;
+        let layer = (first..end)
+            .find(|&l| layer_z[l + 1] >= zm - scale)
+            .unwrap_or(end - 1);
+        let (z0, z1) = (layer_z[layer], layer_z[layer + 1]);
+        (layer, (2.0 * (zm - z0) / (z1 - z0) - 1.0).clamp(-1.0, 1.0))
+    }
+
+    /// Step 7: every face of a non-void cell that borders void or the edge of
+    /// the grid is on the outer boundary of the complete mesh.
+    fn surfaces(&self, cell_elem: &[u32]) -> Vec<SurfaceFace> {
+        // Neighbour offsets in the order of the hex8 local faces.
+        const DIRS: [(isize, isize, isize); 6] = [
+            (0, 0, -1),
+            (0, 0, 1),
+            (0, -1, 0),
+            (1, 0, 0),
+            (0, 1, 0),
+            (-1, 0, 0),
+        ];
+        let mut surfaces = Vec::new();
+        for k in 0..self.nk {
+            for j in 0..self.nj {
+                for i in 0..self.ni {
+                    let c = self.cells[self.cell_index(i, j, k)];
+                    if c == Cell::Void {
+                        continue;
+                    }
+                    let elem = cell_elem[self.cell_index(i, j, k)];
+                    for (face, &(di, dj, dk)) in DIRS.iter().enumerate() {
+                        let (a, b, cc) = (i as isize + di, j as isize + dj, k as isize + dk);
+                        if self.cell(a, b, cc) != Cell::Void {
+                            continue;
+                        }
+                        surfaces.push(SurfaceFace {
+                            elem,
+                            face: face as u8,
+                            kind: self.surface_kind(c, j, face, !self.inside(a, b, cc)),
+                        });
+                    }
+                }
+            }
+        }
+        surfaces
+    }
+
+    /// Boundary family of local face `face` of a cell of class `c` in column
+    /// `j`; `outside` when the face is on the edge of the grid.
+    fn surface_kind(&self, c: Cell, j: usize, face: usize, outside: bool) -> SurfaceKind {
+        match c {
+            Cell::Rock => {
+                if outside && face != 1 {
+                    SurfaceKind::Far
+                } else if j < self.j0 {
+                    SurfaceKind::Wet
+                } else {
+                    SurfaceKind::Ground
+                }
+            }
+            _ => {
+                if outside && face == 0 {
+                    SurfaceKind::Far
+                } else if face == 2 {
+                    SurfaceKind::Wet
+                } else {
+                    SurfaceKind::Ground
+                }
+            }
+        }
+    }
+
+    fn block_infos(&self) -> Vec<BlockInfo> {
+        self.layers
+            .blocks
+            .iter()
+            .enumerate()
+            .map(|(b, &(base, n_lifts))| BlockInfo {
+                block: b as u32 + 1,
+                n_lifts,
+                base_layer: base,
+                foundation_z: self.layers.z[base as usize],
+            })
+            .collect()
+    }
 }
 
 /// Lifts per zone from the two heights; the error names `zone_height_m`.

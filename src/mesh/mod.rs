@@ -37,7 +37,8 @@
 //!   same point as `nodes_a[k]` (it is `elem_b`'s nodes `[0, 3, 7, 4]`). On that
 //!   quad the bilinear coordinates are `s` = η (−1 upstream edge, +1
 //!   downstream edge) and `t` = ζ (−1 bottom, +1 top); `nodes_a` are at
-//!   `(s, t) = (−1,−1), (1,−1), (1,1), (−1,1)` ([`quad_shape`]).
+//!   `(s, t) = (−1,−1), (1,−1), (1,1), (−1,1)`, the corner order of
+//!   [`crate::fem::quad4`], whose shape functions weigh them.
 //! * **Zone points.** Per (joint, zone): upstream, centre, downstream, at the
 //!   zone's mid height. Upstream is on the joint's upstream edge (`s = −1` of
 //!   the first concrete cell across), downstream on its downstream edge, the
@@ -164,7 +165,7 @@ pub struct ZoneSite {
     pub point: ZonePoint,
     /// Index into [`Mesh::face_pairs`].
     pub pair: u32,
-    /// Bilinear coordinates in [−1, 1]² on `nodes_a` of the pair ([`quad_shape`]).
+    /// Bilinear coordinates in [−1, 1]² on `nodes_a` of the pair ([`crate::fem::quad4::shape`]).
     pub s: f64,
     pub t: f64,
     pub xyz: [f64; 3],
@@ -256,17 +257,6 @@ struct LiftIndex {
     blocks: Vec<(Vec<u32>, Vec<usize>)>,
 }
 
-/// Bilinear quad shape functions at (s, t) for nodes at
-/// (−1,−1), (1,−1), (1,1), (−1,1) (the order of `FacePair::nodes_a`).
-pub fn quad_shape(s: f64, t: f64) -> [f64; 4] {
-    [
-        0.25 * (1.0 - s) * (1.0 - t),
-        0.25 * (1.0 + s) * (1.0 - t),
-        0.25 * (1.0 + s) * (1.0 + t),
-        0.25 * (1.0 - s) * (1.0 + t),
-    ]
-}
-
 /// Determinant of the hex8 Jacobian at reference point (ξ, η, ζ).
 pub fn hex_jacobian_det(x: &[[f64; 3]; 8], xi: f64, eta: f64, zeta: f64) -> f64 {
     crate::fem::hex8::jacobian(x, [xi, eta, zeta]).1
@@ -354,15 +344,10 @@ impl Mesh {
 
     /// Point at bilinear coordinates (s, t) on `nodes_a` of face pair `pair`.
     pub fn face_pair_point(&self, pair: usize, s: f64, t: f64) -> [f64; 3] {
-        let fp = &self.face_pairs[pair];
-        let n = quad_shape(s, t);
-        let mut p = [0.0; 3];
-        for (k, &node) in fp.nodes_a.iter().enumerate() {
-            for (pc, xc) in p.iter_mut().zip(self.nodes[node as usize]) {
-                *pc += n[k] * xc;
-            }
-        }
-        p
+        let corners = self.face_pairs[pair]
+            .nodes_a
+            .map(|n| self.nodes[n as usize]);
+        crate::fem::quad4::point(&corners, [s, t])
     }
 
     fn index(&self) -> &LiftIndex {
@@ -450,14 +435,46 @@ impl Mesh {
     /// bands, pairs of their joint and zone), zone points (on their pair at
     /// (s, t)), and that `thermal_dof` merges exactly the face-pair node pairs.
     pub fn validate(&self) -> Result<(), MeshError> {
-        let inv = |m: String| Err(MeshError::Invalid(m));
+        self.validate_sizes()?;
+        self.validate_elements()?;
+        self.validate_parts()?;
+        for (ip, fp) in self.face_pairs.iter().enumerate() {
+            self.validate_face_pair(ip, fp)?;
+        }
+        let mut pairs_in_zones = 0usize;
+        for z in &self.zones {
+            self.validate_zone(z)?;
+            pairs_in_zones += z.pairs.len();
+        }
+        if pairs_in_zones != self.face_pairs.len() {
+            return invalid(format!(
+                "{} face pairs but {} in zones",
+                self.face_pairs.len(),
+                pairs_in_zones
+            ));
+        }
+        self.validate_zone_points()?;
+        for s in &self.surfaces {
+            if s.elem as usize >= self.elements.len() || s.face >= 6 {
+                return invalid(format!(
+                    "surface face ({}, {}) out of range",
+                    s.elem, s.face
+                ));
+            }
+        }
+        self.validate_thermal_dofs()
+    }
+
+    /// Lengths of the per-node and per-element arrays, finite coordinates,
+    /// increasing layers, non-zero zone and lift sizes.
+    fn validate_sizes(&self) -> Result<(), MeshError> {
         let nn = self.nodes.len();
         let ne = self.elements.len();
         if self.parts.len() != ne {
-            return inv(format!("{} parts for {} elements", self.parts.len(), ne));
+            return invalid(format!("{} parts for {} elements", self.parts.len(), ne));
         }
         if self.thermal_dof.len() != nn {
-            return inv(format!(
+            return invalid(format!(
                 "{} thermal dofs for {} nodes",
                 self.thermal_dof.len(),
                 nn
@@ -468,18 +485,23 @@ impl Mesh {
             .iter()
             .position(|p| p.iter().any(|c| !c.is_finite()))
         {
-            return inv(format!("node {p} has a non-finite coordinate"));
+            return invalid(format!("node {p} has a non-finite coordinate"));
         }
         if self.layer_z.windows(2).any(|w| w[1] <= w[0]) {
-            return inv("layer_z is not strictly increasing".into());
+            return invalid("layer_z is not strictly increasing".into());
         }
         if self.zone_lifts == 0 || self.layers_per_lift == 0 {
-            return inv("zone_lifts and layers_per_lift must be >= 1".into());
+            return invalid("zone_lifts and layers_per_lift must be >= 1".into());
         }
-        // Elements: indices and corner Jacobians.
+        Ok(())
+    }
+
+    /// Node indices in range and a positive Jacobian at every corner.
+    fn validate_elements(&self) -> Result<(), MeshError> {
+        let nn = self.nodes.len();
         for (e, conn) in self.elements.iter().enumerate() {
             if let Some(&bad) = conn.iter().find(|&&n| n as usize >= nn) {
-                return inv(format!("element {e} refers to node {bad} of {nn}"));
+                return invalid(format!("element {e} refers to node {bad} of {nn}"));
             }
             let x = self.element_coords(e);
             for (c, r) in HEX_REF.iter().enumerate() {
@@ -493,7 +515,12 @@ impl Mesh {
                 }
             }
         }
-        // Parts vs blocks.
+        Ok(())
+    }
+
+    /// Every concrete element names a block and lift that exist; blocks are
+    /// numbered 1..=n in order.
+    fn validate_parts(&self) -> Result<(), MeshError> {
         for (e, p) in self.parts.iter().enumerate() {
             if let Part::Concrete { block, lift } = *p {
                 let ok = block >= 1
@@ -501,138 +528,131 @@ impl Mesh {
                     && lift >= 1
                     && lift <= self.blocks[block as usize - 1].n_lifts;
                 if !ok {
-                    return inv(format!("element {e}: unknown block {block} / lift {lift}"));
+                    return invalid(format!("element {e}: unknown block {block} / lift {lift}"));
                 }
             }
         }
         for (i, b) in self.blocks.iter().enumerate() {
             if b.block as usize != i + 1 {
-                return inv(format!("blocks[{i}] has number {}", b.block));
+                return invalid(format!("blocks[{i}] has number {}", b.block));
             }
         }
-        // Face pairs.
-        let tol = 1e-9;
-        for (ip, fp) in self.face_pairs.iter().enumerate() {
-            let (ea, eb) = (fp.elem_a as usize, fp.elem_b as usize);
-            if ea >= ne || eb >= ne {
-                return inv(format!("face pair {ip}: element out of range"));
-            }
-            let a = &self.elements[ea];
-            let b = &self.elements[eb];
-            if fp.nodes_a != [a[1], a[2], a[6], a[5]] {
-                return inv(format!(
-                    "face pair {ip}: nodes_a is not face 3 of element {ea}"
-                ));
-            }
-            if fp.nodes_b != [b[0], b[3], b[7], b[4]] {
-                return inv(format!(
-                    "face pair {ip}: nodes_b is not face 5 of element {eb}"
-                ));
-            }
-            match (self.parts[ea], self.parts[eb]) {
-                (Part::Concrete { block: ba, .. }, Part::Concrete { block: bb, .. })
-                    if ba == fp.joint && bb == fp.joint + 1 => {}
-                _ => {
-                    return inv(format!(
-                        "face pair {ip}: elements are not concrete of blocks {} and {}",
-                        fp.joint,
-                        fp.joint + 1
-                    ))
-                }
-            }
-            for k in 0..4 {
-                let pa = self.nodes[fp.nodes_a[k] as usize];
-                let pb = self.nodes[fp.nodes_b[k] as usize];
-                let d = dist(pa, pb);
-                if d > tol {
-                    return inv(format!("face pair {ip}: node {k} pair {d:.3e} m apart"));
-                }
-            }
-            if fp.layer >= self.n_layers() || fp.zone != self.zone_of_layer(fp.layer) {
-                return inv(format!(
-                    "face pair {ip}: layer {} / zone {} inconsistent",
-                    fp.layer, fp.zone
-                ));
-            }
+        Ok(())
+    }
+
+    /// Face pair `ip`: the facing faces of concrete of blocks joint and
+    /// joint + 1, node by node at the same point, in a layer of its zone.
+    fn validate_face_pair(&self, ip: usize, fp: &FacePair) -> Result<(), MeshError> {
+        let ne = self.elements.len();
+        let (ea, eb) = (fp.elem_a as usize, fp.elem_b as usize);
+        if ea >= ne || eb >= ne {
+            return invalid(format!("face pair {ip}: element out of range"));
         }
-        // Zones: whole bands, every pair of the right joint/zone.
-        let mut pairs_in_zones = 0usize;
-        for z in &self.zones {
-            let band = self.zone_layers(z.zone);
-            if band.is_empty() {
-                return inv(format!(
-                    "joint {} zone {} is above the crest",
-                    z.joint, z.zone
-                ));
-            }
-            let mut per_layer: HashMap<u32, usize> = HashMap::new();
-            for &p in &z.pairs {
-                let Some(fp) = self.face_pairs.get(p as usize) else {
-                    return inv(format!(
-                        "joint {} zone {}: pair {p} out of range",
-                        z.joint, z.zone
-                    ));
-                };
-                if fp.joint != z.joint || fp.zone != z.zone {
-                    return inv(format!(
-                        "joint {} zone {}: pair {p} belongs elsewhere",
-                        z.joint, z.zone
-                    ));
-                }
-                *per_layer.entry(fp.layer).or_default() += 1;
-            }
-            let counts: Vec<usize> = band
-                .clone()
-                .map(|l| per_layer.get(&l).copied().unwrap_or(0))
-                .collect();
-            if counts.iter().any(|&c| c == 0 || c != counts[0]) || per_layer.len() != counts.len() {
-                return inv(format!(
-                    "joint {} zone {} is not a whole zone (pairs per layer {:?})",
-                    z.joint, z.zone, counts
-                ));
-            }
-            let zb = self.layer_z[band.start as usize];
-            let zt = self.layer_z[band.end as usize];
-            if (zb - z.z_bottom).abs() > tol || (zt - z.z_top).abs() > tol {
-                return inv(format!(
-                    "joint {} zone {}: wrong elevations",
-                    z.joint, z.zone
-                ));
-            }
-            pairs_in_zones += z.pairs.len();
-        }
-        if pairs_in_zones != self.face_pairs.len() {
-            return inv(format!(
-                "{} face pairs but {} in zones",
-                self.face_pairs.len(),
-                pairs_in_zones
+        let a = &self.elements[ea];
+        let b = &self.elements[eb];
+        if fp.nodes_a != [a[1], a[2], a[6], a[5]] {
+            return invalid(format!(
+                "face pair {ip}: nodes_a is not face 3 of element {ea}"
             ));
         }
+        if fp.nodes_b != [b[0], b[3], b[7], b[4]] {
+            return invalid(format!(
+                "face pair {ip}: nodes_b is not face 5 of element {eb}"
+            ));
+        }
+        match (self.parts[ea], self.parts[eb]) {
+            (Part::Concrete { block: ba, .. }, Part::Concrete { block: bb, .. })
+                if ba == fp.joint && bb == fp.joint + 1 => {}
+            _ => {
+                return invalid(format!(
+                    "face pair {ip}: elements are not concrete of blocks {} and {}",
+                    fp.joint,
+                    fp.joint + 1
+                ))
+            }
+        }
+        for k in 0..4 {
+            let pa = self.nodes[fp.nodes_a[k] as usize];
+            let pb = self.nodes[fp.nodes_b[k] as usize];
+            let d = dist(pa, pb);
+            if d > COINCIDENT_M {
+                return invalid(format!("face pair {ip}: node {k} pair {d:.3e} m apart"));
+            }
+        }
+        if fp.layer >= self.n_layers() || fp.zone != self.zone_of_layer(fp.layer) {
+            return invalid(format!(
+                "face pair {ip}: layer {} / zone {} inconsistent",
+                fp.layer, fp.zone
+            ));
+        }
+        Ok(())
+    }
+
+    /// A zone is a whole band: pairs of its joint and zone, the same number in
+    /// every layer of the band, and the band's elevations.
+    fn validate_zone(&self, z: &Zone) -> Result<(), MeshError> {
+        let band = self.zone_layers(z.zone);
+        if band.is_empty() {
+            return invalid(format!(
+                "joint {} zone {} is above the crest",
+                z.joint, z.zone
+            ));
+        }
+        let mut per_layer: HashMap<u32, usize> = HashMap::new();
+        for &p in &z.pairs {
+            let Some(fp) = self.face_pairs.get(p as usize) else {
+                return invalid(format!(
+                    "joint {} zone {}: pair {p} out of range",
+                    z.joint, z.zone
+                ));
+            };
+            if fp.joint != z.joint || fp.zone != z.zone {
+                return invalid(format!(
+                    "joint {} zone {}: pair {p} belongs elsewhere",
+                    z.joint, z.zone
+                ));
+            }
+            *per_layer.entry(fp.layer).or_default() += 1;
+        }
+        let counts: Vec<usize> = band
+            .clone()
+            .map(|l| per_layer.get(&l).copied().unwrap_or(0))
+            .collect();
+        if counts.iter().any(|&c| c == 0 || c != counts[0]) || per_layer.len() != counts.len() {
+            return invalid(format!(
+                "joint {} zone {} is not a whole zone (pairs per layer {:?})",
+                z.joint, z.zone, counts
+            ));
+        }
+        let zb = self.layer_z[band.start as usize];
+        let zt = self.layer_z[band.end as usize];
+        if (zb - z.z_bottom).abs() > COINCIDENT_M || (zt - z.z_top).abs() > COINCIDENT_M {
+            return invalid(format!(
+                "joint {} zone {}: wrong elevations",
+                z.joint, z.zone
+            ));
+        }
+        Ok(())
+    }
+
+    /// Every zone point lies on a pair of its joint and zone, at its (s, t).
+    fn validate_zone_points(&self) -> Result<(), MeshError> {
         for (i, p) in self.zone_points.iter().enumerate() {
             let Some(fp) = self.face_pairs.get(p.pair as usize) else {
-                return inv(format!("zone point {i}: pair out of range"));
+                return invalid(format!("zone point {i}: pair out of range"));
             };
             if fp.joint != p.joint || fp.zone != p.zone || p.s.abs() > 1.0 || p.t.abs() > 1.0 {
-                return inv(format!(
+                return invalid(format!(
                     "zone point {i} (joint {} zone {}) is off its pair",
                     p.joint, p.zone
                 ));
             }
             let q = self.face_pair_point(p.pair as usize, p.s, p.t);
             if dist(q, p.xyz) > 1e-6 {
-                return inv(format!("zone point {i}: xyz differs from its (s, t)"));
+                return invalid(format!("zone point {i}: xyz differs from its (s, t)"));
             }
         }
-        // Surfaces.
-        for s in &self.surfaces {
-            if s.elem as usize >= ne || s.face >= 6 {
-                return inv(format!(
-                    "surface face ({}, {}) out of range",
-                    s.elem, s.face
-                ));
-            }
-        }
-        self.validate_thermal_dofs()
+        Ok(())
     }
 
     /// `thermal_dof` classes == classes of the node identifications by face pairs.
@@ -684,6 +704,13 @@ impl Mesh {
         }
         Ok(())
     }
+}
+
+/// Distance [m] within which two joint nodes (or two elevations) are the same.
+const COINCIDENT_M: f64 = 1e-9;
+
+fn invalid<T>(m: String) -> Result<T, MeshError> {
+    Err(MeshError::Invalid(m))
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {

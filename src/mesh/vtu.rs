@@ -145,8 +145,6 @@ pub fn write_vtu(
     cell_fields: &[(&str, &[f64])],
     cells: Option<&[u32]>,
 ) -> io::Result<()> {
-    let path = path.as_ref();
-    let n_nodes = mesh.nodes.len();
     let ne = mesh.elements.len();
     let all: Vec<u32>;
     let cells: &[u32] = match cells {
@@ -159,8 +157,6 @@ pub fn write_vtu(
     if let Some(&bad) = cells.iter().find(|&&e| e as usize >= ne) {
         return Err(invalid(format!("cell {bad} out of range ({ne} elements)")));
     }
-    let nc = cells.len();
-    let subset = nc != ne || cells.iter().enumerate().any(|(i, &e)| i as u32 != e);
     for group in [point_fields, cell_fields] {
         for (i, (name, _)) in group.iter().enumerate() {
             if group[..i].iter().any(|(n, _)| n == name) {
@@ -168,8 +164,9 @@ pub fn write_vtu(
             }
         }
     }
-    let caller_has = |n: &str| cell_fields.iter().any(|(name, _)| *name == n);
 
+    let n_nodes = mesh.nodes.len();
+    let nc = cells.len();
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\"?>\n");
     out.push_str(
@@ -180,7 +177,6 @@ pub fn write_vtu(
         out,
         "    <Piece NumberOfPoints=\"{n_nodes}\" NumberOfCells=\"{nc}\">"
     );
-
     out.push_str("      <PointData>\n");
     for (name, vals) in point_fields {
         let comps = components(name, vals.len(), n_nodes, "points")?;
@@ -193,7 +189,25 @@ pub fn write_vtu(
         );
     }
     out.push_str("      </PointData>\n");
+    cell_data(&mut out, mesh, cell_fields, cells)?;
+    geometry(&mut out, mesh, cells);
+    out.push_str("    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+    write_atomic(path.as_ref(), out.as_bytes())
+}
 
+/// The `<CellData>` of the written `cells`: `block` and `lift` unless the
+/// caller has fields of those names, then the caller's fields, gathered onto
+/// the subset when they are given over all elements.
+fn cell_data(
+    out: &mut String,
+    mesh: &Mesh,
+    cell_fields: &[(&str, &[f64])],
+    cells: &[u32],
+) -> io::Result<()> {
+    let ne = mesh.elements.len();
+    let nc = cells.len();
+    let subset = nc != ne || cells.iter().enumerate().any(|(i, &e)| i as u32 != e);
+    let caller_has = |n: &str| cell_fields.iter().any(|(name, _)| *name == n);
     out.push_str("      <CellData>\n");
     let (blocks, lifts): (Vec<i32>, Vec<i32>) = cells
         .iter()
@@ -205,7 +219,7 @@ pub fn write_vtu(
     for (name, vals) in [("block", &blocks), ("lift", &lifts)] {
         if !caller_has(name) {
             let bytes: Vec<u8> = vals.iter().flat_map(|v| v.to_le_bytes()).collect();
-            data_array(&mut out, "Int32", Some(name), 1, &bytes);
+            data_array(out, "Int32", Some(name), 1, &bytes);
         }
     }
     for (name, vals) in cell_fields {
@@ -221,13 +235,17 @@ pub fn write_vtu(
         } else {
             (components(name, vals.len(), nc, "cells")?, vals.to_vec())
         };
-        data_array(&mut out, "Float64", Some(name), comps, &f64_bytes(gathered));
+        data_array(out, "Float64", Some(name), comps, &f64_bytes(gathered));
     }
     out.push_str("      </CellData>\n");
+    Ok(())
+}
 
+/// `<Points>` (every node) and `<Cells>` (the written hexahedra).
+fn geometry(out: &mut String, mesh: &Mesh, cells: &[u32]) {
     out.push_str("      <Points>\n");
     data_array(
-        &mut out,
+        out,
         "Float64",
         None,
         3,
@@ -241,16 +259,13 @@ pub fn write_vtu(
         .flat_map(|&e| mesh.elements[e as usize].iter().map(|&n| n as i64))
         .flat_map(|v| v.to_le_bytes())
         .collect();
-    data_array(&mut out, "Int64", Some("connectivity"), 1, &conn);
-    let offsets: Vec<u8> = (1..=nc as i64)
+    data_array(out, "Int64", Some("connectivity"), 1, &conn);
+    let offsets: Vec<u8> = (1..=cells.len() as i64)
         .flat_map(|i| (8 * i).to_le_bytes())
         .collect();
-    data_array(&mut out, "Int64", Some("offsets"), 1, &offsets);
-    data_array(&mut out, "UInt8", Some("types"), 1, &vec![12u8; nc]);
+    data_array(out, "Int64", Some("offsets"), 1, &offsets);
+    data_array(out, "UInt8", Some("types"), 1, &vec![12u8; cells.len()]);
     out.push_str("      </Cells>\n");
-    out.push_str("    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
-
-    write_atomic(path, out.as_bytes())
 }
 
 /// Write a ParaView collection (`.pvd`) listing `(time [day], file)` entries;

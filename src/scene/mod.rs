@@ -183,6 +183,40 @@ fn default_mu_kinetic() -> f64 {
     0.5
 }
 
+/// λ, ρ and c of a material, and what the heat equation needs from them:
+/// the one implementation behind [`Concrete`] and [`Rock`].
+///
+/// Both tables keep the three keys as their own fields. Embedding one
+/// struct with `#[serde(flatten)]` would keep the TOML format, but serde
+/// cannot combine `flatten` with `deny_unknown_fields`: a misspelt key then
+/// reads as the correct key missing, and unknown keys lose their position
+/// and the list of expected keys (`tests/it/scene_errors.rs`).
+pub trait ThermalProperties {
+    /// Density ρ [kg/m³].
+    fn density_kg_m3(&self) -> f64;
+    /// Specific heat c [J/(kg K)].
+    fn specific_heat_j_kgk(&self) -> f64;
+    /// Thermal conductivity λ [W/(m K)].
+    fn conductivity_w_mk(&self) -> f64;
+
+    /// λ in J/(m·day·K).
+    fn conductivity_j_per_m_day_k(&self) -> f64 {
+        self.conductivity_w_mk() * SECONDS_PER_DAY
+    }
+
+    /// Volumetric heat capacity ρc [J/(m³ K)].
+    fn heat_capacity_j_m3k(&self) -> f64 {
+        self.density_kg_m3() * self.specific_heat_j_kgk()
+    }
+
+    /// Diffusivity a = λ/(ρc) [m²/day].
+    fn diffusivity_m2_per_day(&self) -> f64 {
+        self.conductivity_j_per_m_day_k() / self.heat_capacity_j_m3k()
+    }
+}
+
+/// `[concrete]`: the dam concrete's thermal properties
+/// ([`ThermalProperties`]) and its laws.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Concrete {
@@ -212,6 +246,8 @@ pub struct Concrete {
     pub autogenous: Option<AutogenousLaw>,
 }
 
+/// `[rock]`: the foundation rock's thermal properties
+/// ([`ThermalProperties`]), initial temperature and elastic constants.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rock {
@@ -226,7 +262,7 @@ pub struct Rock {
     /// Initial temperature gradient, positive = warmer with depth [°C/m], default 0.
     #[serde(default)]
     pub gradient_c_per_m: f64,
-    /// Elastic modulus of the rock [Pa]; required by any mechanical effect when the mesh has rock.
+    /// Elastic modulus of the rock \[Pa\]; required by any mechanical effect when the mesh has rock.
     #[serde(default)]
     pub modulus_pa: Option<f64>,
     /// Poisson's ratio of the rock.
@@ -549,47 +585,27 @@ impl Scene {
     }
 }
 
-impl Concrete {
-    /// λ in J/(m·day·K).
-    pub fn conductivity_j_per_m_day_k(&self) -> f64 {
-        heat::conductivity_per_day(self.conductivity_w_mk)
-    }
-
-    /// Volumetric heat capacity ρc [J/(m³ K)].
-    pub fn heat_capacity_j_m3k(&self) -> f64 {
-        heat::capacity(self.density_kg_m3, self.specific_heat_j_kgk)
-    }
-
-    /// Diffusivity a = λ/(ρc) [m²/day].
-    pub fn diffusivity_m2_per_day(&self) -> f64 {
-        heat::diffusivity(
-            self.conductivity_w_mk,
-            self.density_kg_m3,
-            self.specific_heat_j_kgk,
-        )
-    }
+/// [`ThermalProperties`] of tables that carry the three keys as fields of
+/// the same names.
+macro_rules! thermal_properties_of_fields {
+    ($($table:ty),+) => {$(
+        impl ThermalProperties for $table {
+            fn density_kg_m3(&self) -> f64 {
+                self.density_kg_m3
+            }
+            fn specific_heat_j_kgk(&self) -> f64 {
+                self.specific_heat_j_kgk
+            }
+            fn conductivity_w_mk(&self) -> f64 {
+                self.conductivity_w_mk
+            }
+        }
+    )+};
 }
 
+thermal_properties_of_fields!(Concrete, Rock);
+
 impl Rock {
-    /// λ in J/(m·day·K).
-    pub fn conductivity_j_per_m_day_k(&self) -> f64 {
-        heat::conductivity_per_day(self.conductivity_w_mk)
-    }
-
-    /// Volumetric heat capacity ρc [J/(m³ K)].
-    pub fn heat_capacity_j_m3k(&self) -> f64 {
-        heat::capacity(self.density_kg_m3, self.specific_heat_j_kgk)
-    }
-
-    /// Diffusivity a = λ/(ρc) [m²/day].
-    pub fn diffusivity_m2_per_day(&self) -> f64 {
-        heat::diffusivity(
-            self.conductivity_w_mk,
-            self.density_kg_m3,
-            self.specific_heat_j_kgk,
-        )
-    }
-
     /// Initial rock temperature at elevation `z` [°C], given the elevation of
     /// the deepest foundation `z_ref` (where it is `initial_temp_c`).
     pub fn initial_temp_at(&self, z: f64, z_ref: f64) -> f64 {
@@ -722,22 +738,5 @@ mod dates {
 
     pub(super) fn dates<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<NaiveDate>, D::Error> {
         d.deserialize_seq(SeqVisitor)
-    }
-}
-
-/// Unit conversions shared by every material with λ [W/(m K)], ρ and c.
-mod heat {
-    use super::SECONDS_PER_DAY;
-
-    pub fn conductivity_per_day(lambda_w_mk: f64) -> f64 {
-        lambda_w_mk * SECONDS_PER_DAY
-    }
-
-    pub fn capacity(density: f64, specific_heat: f64) -> f64 {
-        density * specific_heat
-    }
-
-    pub fn diffusivity(lambda_w_mk: f64, density: f64, specific_heat: f64) -> f64 {
-        conductivity_per_day(lambda_w_mk) / capacity(density, specific_heat)
     }
 }

@@ -4,14 +4,48 @@
 use crate::material::{AdiabaticRise, PipeLayout};
 use crate::mesh::geometry::{ArchGeometry, BlocksGeometry, Geometry};
 
-use super::{Air, Effect, Reservoir, Rock, Scene, SceneError};
+use super::{
+    Air, Effect, JointSettings, Reservoir, Rock, Scene, SceneError, ThermalProperties, TimeStepping,
+};
 
 type Check = Result<(), SceneError>;
 
 /// Relative tolerance of "a whole number of lifts".
 const WHOLE_TOL: f64 = 1e-9;
 
+/// Every check of a parsed scene, table by table; the first failure is the
+/// error (the order decides which of several problems a user sees first).
 pub(super) fn validate(s: &Scene) -> Check {
+    names(s)?;
+    lifts_and_zones(s)?;
+    mechanical(s)?;
+    joints(&s.joints)?;
+    concrete(s)?;
+    optional_tables(s)?;
+    match &s.geometry {
+        Geometry::Blocks(g) => blocks(g, s)?,
+        Geometry::Arch(g) => arch(g, s)?,
+    }
+    time(&s.time, s)?;
+    if let Err((key, message)) = s.solver.validate() {
+        return Err(SceneError::invalid(&key, message));
+    }
+    if let Err((key, message)) = s.planner.validate() {
+        return Err(SceneError::invalid(&key, message));
+    }
+    for d in &s.output.snapshots {
+        if *d < s.epoch.0 {
+            return Err(SceneError::invalid(
+                "output.snapshots",
+                format!("output.snapshots: {d} is before epoch {}", s.epoch),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A name, and no effect listed twice.
+fn names(s: &Scene) -> Check {
     if s.name.trim().is_empty() {
         return Err(SceneError::invalid("name", "name must not be empty"));
     }
@@ -23,8 +57,11 @@ pub(super) fn validate(s: &Scene) -> Check {
             ));
         }
     }
+    Ok(())
+}
 
-    // Lifts and zones.
+/// Lift and zone heights, a zone being a whole number of lifts.
+fn lifts_and_zones(s: &Scene) -> Check {
     positive("lifts.height_m", s.lifts.height_m)?;
     positive("joints.zone_height_m", s.joints.zone_height_m)?;
     if whole_multiple(s.joints.zone_height_m, s.lifts.height_m).is_none() {
@@ -36,9 +73,11 @@ pub(super) fn validate(s: &Scene) -> Check {
             ),
         ));
     }
+    Ok(())
+}
 
-    mechanical(s)?;
-    let j = &s.joints;
+/// Friction, initial gap and grout layer of the joints.
+fn joints(j: &JointSettings) -> Check {
     if !(j.mu_static.is_finite() && j.mu_static >= 0.0) {
         return Err(SceneError::invalid(
             "joints.mu_static",
@@ -60,28 +99,40 @@ pub(super) fn validate(s: &Scene) -> Check {
             format!("joints.initial_gap_m must be >= 0, got {}", j.initial_gap_m),
         ));
     }
-
     positive("joints.grout_modulus_pa", j.grout_modulus_pa)?;
     positive("joints.grout_shear_modulus_pa", j.grout_shear_modulus_pa)?;
     positive("joints.grout_min_thickness_m", j.grout_min_thickness_m)?;
-    positive("joints.bond_strength_pa", j.bond_strength_pa)?;
+    positive("joints.bond_strength_pa", j.bond_strength_pa)
+}
 
-    // Concrete.
+/// The concrete's thermal properties and adiabatic rise (required by
+/// `hydration`).
+fn concrete(s: &Scene) -> Check {
     let c = &s.concrete;
-    positive("concrete.density_kg_m3", c.density_kg_m3)?;
-    positive("concrete.specific_heat_j_kgk", c.specific_heat_j_kgk)?;
-    positive("concrete.conductivity_w_mk", c.conductivity_w_mk)?;
+    thermal_properties("concrete", c)?;
     if let Some(rise) = &c.adiabatic {
         adiabatic("concrete.adiabatic", rise)?;
     }
-    if s.has(Effect::Hydration) && c.adiabatic.is_none() {
-        return Err(SceneError::invalid(
-            "concrete.adiabatic",
-            "effect `hydration` needs a [concrete.adiabatic] table, which is missing",
-        ));
-    }
+    needs_table(
+        s,
+        Effect::Hydration,
+        c.adiabatic.is_some(),
+        "concrete.adiabatic",
+    )
+}
 
-    // Optional tables: checked whenever present, required by their effects.
+/// ρ, c and λ of `[table]`, each > 0.
+fn thermal_properties(table: &str, m: &impl ThermalProperties) -> Check {
+    positive(&format!("{table}.density_kg_m3"), m.density_kg_m3())?;
+    positive(
+        &format!("{table}.specific_heat_j_kgk"),
+        m.specific_heat_j_kgk(),
+    )?;
+    positive(&format!("{table}.conductivity_w_mk"), m.conductivity_w_mk())
+}
+
+/// Optional tables: checked whenever present, required by their effects.
+fn optional_tables(s: &Scene) -> Check {
     if let Some(rock) = &s.rock {
         rock_table(rock)?;
     }
@@ -99,39 +150,36 @@ pub(super) fn validate(s: &Scene) -> Check {
             }
         }
     }
-    if s.has(Effect::PipeCooling) && s.pipes.is_none() {
-        return Err(SceneError::invalid(
-            "pipes",
-            "effect `pipe_cooling` needs a [pipes] table, which is missing",
-        ));
-    }
+    needs_table(s, Effect::PipeCooling, s.pipes.is_some(), "pipes")?;
     if let Some(a) = &s.air {
         air(a)?;
     }
-    if s.has(Effect::Ambient) && s.air.is_none() {
-        return Err(SceneError::invalid(
-            "air",
-            "effect `ambient` needs an [air] table, which is missing",
-        ));
-    }
+    needs_table(s, Effect::Ambient, s.air.is_some(), "air")?;
     if let Some(r) = &s.reservoir {
         reservoir(r)?;
     }
-    if s.has(Effect::ReservoirTemperature) && s.reservoir.is_none() {
+    needs_table(
+        s,
+        Effect::ReservoirTemperature,
+        s.reservoir.is_some(),
+        "reservoir",
+    )
+}
+
+/// `effect needs a [table] table, which is missing` when `effect` is on and
+/// its table is not there.
+fn needs_table(s: &Scene, effect: Effect, present: bool, table: &str) -> Check {
+    if s.has(effect) && !present {
         return Err(SceneError::invalid(
-            "reservoir",
-            "effect `reservoir_temperature` needs a [reservoir] table, which is missing",
+            table,
+            format!("effect `{effect}` needs a [{table}] table, which is missing"),
         ));
     }
+    Ok(())
+}
 
-    // Geometry.
-    match &s.geometry {
-        Geometry::Blocks(g) => blocks(g, s)?,
-        Geometry::Arch(g) => arch(g, s)?,
-    }
-
-    // Time stepping.
-    let t = &s.time;
+/// The step ladder and θ, and an end date after the epoch.
+fn time(t: &TimeStepping, s: &Scene) -> Check {
     positive("time.first_step_days", t.first_step_days)?;
     finite("time.growth", t.growth)?;
     if t.growth < 1.0 {
@@ -161,23 +209,6 @@ pub(super) fn validate(s: &Scene) -> Check {
             return Err(SceneError::invalid(
                 "time.end_date",
                 format!("time.end_date = {end} must be after epoch {}", s.epoch),
-            ));
-        }
-    }
-
-    if let Err((key, message)) = s.solver.validate() {
-        return Err(SceneError::invalid(&key, message));
-    }
-    if let Err((key, message)) = s.planner.validate() {
-        return Err(SceneError::invalid(&key, message));
-    }
-
-    // Output.
-    for d in &s.output.snapshots {
-        if *d < s.epoch.0 {
-            return Err(SceneError::invalid(
-                "output.snapshots",
-                format!("output.snapshots: {d} is before epoch {}", s.epoch),
             ));
         }
     }
@@ -329,9 +360,7 @@ fn pipes(prefix: &str, p: &PipeLayout) -> Check {
 }
 
 fn rock_table(r: &Rock) -> Check {
-    positive("rock.density_kg_m3", r.density_kg_m3)?;
-    positive("rock.specific_heat_j_kgk", r.specific_heat_j_kgk)?;
-    positive("rock.conductivity_w_mk", r.conductivity_w_mk)?;
+    thermal_properties("rock", r)?;
     finite("rock.initial_temp_c", r.initial_temp_c)?;
     finite("rock.gradient_c_per_m", r.gradient_c_per_m)
 }

@@ -146,22 +146,58 @@ fn placement_temp(p: &SynthParams, date: NaiveDate) -> f64 {
 /// [`super::validate`] and [`super::check_against`]`(_, layout)`; the
 /// parameters themselves are not checked.
 pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
-    let p = params;
-    let interval = p.lift_interval_days.max(1) as i64;
     let mut blocks: Vec<(u32, u32)> = layout.blocks.clone();
     blocks.sort();
     blocks.dedup_by_key(|b| b.0);
-    let n_lifts: HashMap<u32, u32> = blocks.iter().copied().collect();
+    let (mut pours, pour_date) = pours(params, &blocks);
+    let (mut grouting, grout) = grouting(params, layout, &blocks, &pour_date);
+    let dates = Dates {
+        p: params,
+        pour: pour_date,
+        block_zones: block_zones(layout, &grout),
+        grout,
+    };
+    let mut cooling = dates.cooling(&blocks);
+
+    pours.sort_by_key(|r| (r.date, r.block, r.lift));
+    cooling.sort_by_key(|c| (c.start, c.block, c.lift_from, c.stage));
+    grouting.sort_by_key(|g| (g.planned, g.joint, g.zone));
+    for (i, r) in pours.iter_mut().enumerate() {
+        r.line = i + 2;
+    }
+    for (i, r) in cooling.iter_mut().enumerate() {
+        r.line = i + 2;
+    }
+    for (i, r) in grouting.iter_mut().enumerate() {
+        r.line = i + 2;
+    }
+    Schedules {
+        dir: Default::default(),
+        pours,
+        cooling,
+        grouting,
+        weather: None,
+        reservoir: None,
+        joint_meters: None,
+    }
+}
+
+/// Pour date of (block, lift).
+type DateOf = HashMap<(u32, u32), NaiveDate>;
+
+/// Every lift of every block (sorted `(block, n_lifts)`), one lift per
+/// interval; a block starts as many intervals late as it has lifts fewer than
+/// the tallest, plus the stagger of its distance from the centre of the row.
+fn pours(p: &SynthParams, blocks: &[(u32, u32)]) -> (Vec<Pour>, DateOf) {
+    let interval = p.lift_interval_days.max(1) as i64;
     let n_max = blocks.iter().map(|b| b.1).max().unwrap_or(0);
     let centre = match (blocks.first(), blocks.last()) {
         (Some(a), Some(b)) => (a.0 as f64 + b.0 as f64) / 2.0,
         _ => 0.0,
     };
-
-    // Pours.
-    let mut pour_date: HashMap<(u32, u32), NaiveDate> = HashMap::new();
+    let mut pour_date: DateOf = HashMap::new();
     let mut pours = Vec::new();
-    for &(block, n) in &blocks {
+    for &(block, n) in blocks {
         let base = (n_max - n) as i64;
         let offset = (p.block_stagger_days as f64 * (block as f64 - centre).abs()).round() as i64;
         for lift in 1..=n {
@@ -176,14 +212,25 @@ pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
             });
         }
     }
-    let poured = |block: u32, lift: u32| pour_date.get(&(block, lift)).copied();
+    (pours, pour_date)
+}
 
-    // Grouting, per joint bottom-up.
+/// Grouting per joint bottom-up: each zone on the first day both blocks
+/// cover it, its youngest lift is old enough and the zone below is
+/// `zone_gap_days` behind. Returns the rows and the date of (joint, zone).
+fn grouting(
+    p: &SynthParams,
+    layout: &DamLayout,
+    blocks: &[(u32, u32)],
+    pour_date: &DateOf,
+) -> (Vec<GroutingPlan>, DateOf) {
+    let n_lifts: HashMap<u32, u32> = blocks.iter().copied().collect();
+    let poured = |block: u32, lift: u32| pour_date.get(&(block, lift)).copied();
     let mut by_joint: BTreeMap<u32, Vec<&super::ZoneExtent>> = BTreeMap::new();
     for z in &layout.zones {
         by_joint.entry(z.joint).or_default().push(z);
     }
-    let mut grout: HashMap<(u32, u32), NaiveDate> = HashMap::new();
+    let mut grout: DateOf = HashMap::new();
     let mut grouting = Vec::new();
     for (joint, mut zones) in by_joint {
         zones.sort_by_key(|z| z.zone);
@@ -216,8 +263,12 @@ pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
             });
         }
     }
+    (grouting, grout)
+}
 
-    // Per block: zone → (first, last) lift and the joints it is grouted on.
+/// Per block: zone → (first, last) lift and the joints it is grouted on
+/// (zones that got a grouting date only).
+fn block_zones(layout: &DamLayout, grout: &DateOf) -> HashMap<u32, BTreeMap<u32, BlockZone>> {
     let mut block_zones: HashMap<u32, BTreeMap<u32, BlockZone>> = HashMap::new();
     for z in &layout.zones {
         if !grout.contains_key(&(z.joint, z.zone)) {
@@ -234,108 +285,124 @@ pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
             e.2.push(z.joint);
         }
     }
+    block_zones
+}
 
-    // Cooling.
-    let mut cooling: Vec<CoolingStage> = Vec::new();
-    let mut later_stages: Vec<CoolingStage> = Vec::new();
-    for &(block, n) in &blocks {
-        let zones = block_zones.get(&block);
-        // (zone of lift, grouting dates of that zone and of the zone below)
+/// The dates the cooling stages are timed by.
+struct Dates<'a> {
+    p: &'a SynthParams,
+    pour: DateOf,
+    /// Grouting date of (joint, zone).
+    grout: DateOf,
+    block_zones: HashMap<u32, BTreeMap<u32, BlockZone>>,
+}
+
+impl Dates<'_> {
+    /// Every lift's first stage, then its middle and second stages, those of
+    /// adjacent lifts with the same dates merged into one row.
+    fn cooling(&self, blocks: &[(u32, u32)]) -> Vec<CoolingStage> {
+        let p = self.p;
+        let mut cooling: Vec<CoolingStage> = Vec::new();
+        let mut later_stages: Vec<CoolingStage> = Vec::new();
+        for &(block, n) in blocks {
+            for lift in 1..=n {
+                let Some(pd) = self.pour.get(&(block, lift)).copied() else {
+                    continue;
+                };
+                let first_end = add_days(pd, p.first_days.max(1) as i64);
+                let one_lift = |stage, start, end, water_temp_c, target_temp_c| CoolingStage {
+                    block,
+                    lift_from: lift,
+                    lift_to: lift,
+                    stage,
+                    start,
+                    end,
+                    water_temp_c,
+                    target_temp_c,
+                    line: 0,
+                };
+                cooling.push(one_lift(
+                    Stage::First,
+                    pd,
+                    Some(first_end),
+                    p.first_water_c,
+                    p.first_target_c,
+                ));
+                let middle = |end| {
+                    let target = Some(p.middle_target_c);
+                    one_lift(Stage::Middle, first_end, end, p.middle_water_c, target)
+                };
+                match self.second_stage(block, lift, first_end) {
+                    Some((s2, e2)) => {
+                        if s2 > first_end {
+                            later_stages.push(middle(Some(s2)));
+                        }
+                        let target = Some(p.closure_temp_c);
+                        later_stages.push(one_lift(
+                            Stage::Second,
+                            s2,
+                            Some(e2),
+                            p.second_water_c,
+                            target,
+                        ));
+                    }
+                    None => later_stages.push(middle(None)),
+                }
+            }
+        }
+        cooling.extend(merge_adjacent_lifts(later_stages));
+        cooling
+    }
+
+    /// The second stage of `lift` of `block`: from `second_lead_days` before
+    /// the first grouting of its zone or of the zone below (not before the
+    /// first stage ends at `first_end`, and right after it when the middle
+    /// stage would be shorter than `min_middle_days`) to the last grouting of
+    /// its zone. `None` when the lift is in no grouted zone.
+    fn second_stage(
+        &self,
+        block: u32,
+        lift: u32,
+        first_end: NaiveDate,
+    ) -> Option<(NaiveDate, NaiveDate)> {
+        let p = self.p;
+        let zones = self.block_zones.get(&block)?;
         let dates_of = |zone: u32| -> Vec<NaiveDate> {
             zones
-                .and_then(|m| m.get(&zone))
+                .get(&zone)
                 .map(|e| {
                     e.2.iter()
-                        .filter_map(|j| grout.get(&(*j, zone)).copied())
+                        .filter_map(|j| self.grout.get(&(*j, zone)).copied())
                         .collect()
                 })
                 .unwrap_or_default()
         };
-        for lift in 1..=n {
-            let Some(pd) = poured(block, lift) else {
-                continue;
-            };
-            let first_end = add_days(pd, p.first_days.max(1) as i64);
-            cooling.push(CoolingStage {
-                block,
-                lift_from: lift,
-                lift_to: lift,
-                stage: Stage::First,
-                start: pd,
-                end: Some(first_end),
-                water_temp_c: p.first_water_c,
-                target_temp_c: p.first_target_c,
-                line: 0,
-            });
-            let zone = zones.and_then(|m| {
-                m.iter()
-                    .find(|(_, e)| e.0 <= lift && lift <= e.1)
-                    .map(|(k, _)| *k)
-            });
-            let mut second: Option<(NaiveDate, NaiveDate)> = None;
-            if let Some(k) = zone {
-                let own = dates_of(k);
-                let below = zones
-                    .and_then(|m| m.range(..k).next_back().map(|(kb, _)| *kb))
-                    .map(&dates_of)
-                    .unwrap_or_default();
-                let need = own.iter().chain(below.iter()).min().copied();
-                let end = own.iter().max().copied();
-                if let (Some(need), Some(end)) = (need, end) {
-                    let mut start = add_days(need, -(p.second_lead_days as i64)).max(first_end);
-                    if start < add_days(first_end, p.min_middle_days as i64) {
-                        start = first_end;
-                    }
-                    if end > start {
-                        second = Some((start, end));
-                    }
-                }
-            }
-            match second {
-                Some((s2, e2)) => {
-                    if s2 > first_end {
-                        later_stages.push(CoolingStage {
-                            block,
-                            lift_from: lift,
-                            lift_to: lift,
-                            stage: Stage::Middle,
-                            start: first_end,
-                            end: Some(s2),
-                            water_temp_c: p.middle_water_c,
-                            target_temp_c: Some(p.middle_target_c),
-                            line: 0,
-                        });
-                    }
-                    later_stages.push(CoolingStage {
-                        block,
-                        lift_from: lift,
-                        lift_to: lift,
-                        stage: Stage::Second,
-                        start: s2,
-                        end: Some(e2),
-                        water_temp_c: p.second_water_c,
-                        target_temp_c: Some(p.closure_temp_c),
-                        line: 0,
-                    });
-                }
-                None => later_stages.push(CoolingStage {
-                    block,
-                    lift_from: lift,
-                    lift_to: lift,
-                    stage: Stage::Middle,
-                    start: first_end,
-                    end: None,
-                    water_temp_c: p.middle_water_c,
-                    target_temp_c: Some(p.middle_target_c),
-                    line: 0,
-                }),
-            }
+        let k = zones
+            .iter()
+            .find(|(_, e)| e.0 <= lift && lift <= e.1)
+            .map(|(k, _)| *k)?;
+        let own = dates_of(k);
+        let below = zones
+            .range(..k)
+            .next_back()
+            .map(|(kb, _)| dates_of(*kb))
+            .unwrap_or_default();
+        let need = own.iter().chain(below.iter()).min().copied()?;
+        let end = own.iter().max().copied()?;
+        let mut start = add_days(need, -(p.second_lead_days as i64)).max(first_end);
+        if start < add_days(first_end, p.min_middle_days as i64) {
+            start = first_end;
         }
+        (end > start).then_some((start, end))
     }
-    // Merge middle/second stages of adjacent lifts with the same dates.
-    later_stages.sort_by_key(|c| (c.block, c.stage, c.start, c.end, c.lift_from));
+}
+
+/// Middle/second stages of adjacent lifts of a block with the same dates
+/// become one row.
+fn merge_adjacent_lifts(mut stages: Vec<CoolingStage>) -> Vec<CoolingStage> {
+    stages.sort_by_key(|c| (c.block, c.stage, c.start, c.end, c.lift_from));
     let mut merged: Vec<CoolingStage> = Vec::new();
-    for c in later_stages {
+    for c in stages {
         if let Some(m) = merged.last_mut() {
             if m.block == c.block
                 && m.stage == c.stage
@@ -349,29 +416,7 @@ pub fn synthesize(layout: &DamLayout, params: &SynthParams) -> Schedules {
         }
         merged.push(c);
     }
-    cooling.extend(merged);
-
-    pours.sort_by_key(|r| (r.date, r.block, r.lift));
-    cooling.sort_by_key(|c| (c.start, c.block, c.lift_from, c.stage));
-    grouting.sort_by_key(|g| (g.planned, g.joint, g.zone));
-    for (i, r) in pours.iter_mut().enumerate() {
-        r.line = i + 2;
-    }
-    for (i, r) in cooling.iter_mut().enumerate() {
-        r.line = i + 2;
-    }
-    for (i, r) in grouting.iter_mut().enumerate() {
-        r.line = i + 2;
-    }
-    Schedules {
-        dir: Default::default(),
-        pours,
-        cooling,
-        grouting,
-        weather: None,
-        reservoir: None,
-        joint_meters: None,
-    }
+    merged
 }
 
 #[cfg(test)]

@@ -761,7 +761,7 @@ impl ThermalModel {
     pub fn point_temperature(&self, mesh: &Mesh, p: &ZoneSite) -> Option<f64> {
         let pair = &mesh.face_pairs[p.pair as usize];
         let sys = &self.sys;
-        let n = crate::mesh::quad_shape(p.s, p.t);
+        let n = crate::fem::quad4::shape([p.s, p.t]);
         let mut value = 0.0;
         for (k, &node) in pair.nodes_a.iter().enumerate() {
             let d = mesh.thermal_dof[node as usize];

@@ -3,7 +3,7 @@
 //! as present-or-absent laws, and the time-stepping and solver choices.
 
 use crate::material::{AdiabaticRise, ZhuPipe};
-use crate::scene::{CapacityKind, Effect, Scene, ThermalSolverKind};
+use crate::scene::{CapacityKind, Effect, Scene, ThermalProperties, ThermalSolverKind};
 
 /// Heat-conduction constants of one material.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -112,14 +112,14 @@ fn single_point_frictionless_open_and_closed() {
         &ContactSettings::default(),
     )
     .unwrap();
-    assert!(rel(ns.r_n[0], kn * delta) <= 1e-9);
-    assert_eq!(ns.closed, vec![true]);
+    assert!(rel(ns.r[0], kn * delta) <= 1e-9);
+    assert_eq!(ns.closed(), vec![true]);
     let ns = solve_normal(
         &NormalProblem::new(&wn, &[delta]),
         &ContactSettings::default(),
     )
     .unwrap();
-    assert_eq!((ns.r_n[0], ns.closed[0]), (0.0, false));
+    assert_eq!((ns.r[0], ns.closed()[0]), (0.0, false));
 
     // Tied: u_t = 0 whatever the tangential push; the normal is still unilateral.
     let b = [1.0e-4, -2.0e-4, -delta];

@@ -2,10 +2,11 @@
 
 use std::collections::{HashMap, HashSet};
 
+use groutready::fem::quad4;
 use groutready::mesh::geometry::{ArchGeometry, BlocksGeometry};
 use groutready::mesh::{
-    generate_arch, generate_blocks, hex_jacobian_det, hex_volume, quad_shape, write_pvd, write_vtu,
-    Mesh, MeshError, Part, SurfaceKind, HEX_FACES,
+    generate_arch, generate_blocks, hex_jacobian_det, hex_volume, write_pvd, write_vtu, Mesh,
+    MeshError, Part, SurfaceKind, HEX_FACES,
 };
 use groutready::vocab::ZonePoint;
 
@@ -224,7 +225,7 @@ fn check_zone_points(m: &Mesh) {
         for p in pts {
             let fp = &m.face_pairs[p.pair as usize];
             assert_eq!((fp.joint, fp.zone), (z.joint, z.zone));
-            let w = quad_shape(p.s, p.t);
+            let w = quad4::shape([p.s, p.t]);
             for nodes in [fp.nodes_a, fp.nodes_b] {
                 let mut q = [0.0; 3];
                 for k in 0..4 {
