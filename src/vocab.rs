@@ -207,3 +207,23 @@ impl fmt::Display for JointState {
         f.write_str(self.as_str())
     }
 }
+
+/// A value a validator refused: the key it was read from (as the user
+/// wrote it, relative to the table being checked) and a message that names
+/// the key, what was expected and what was found. Every settings or
+/// material `validate()` returns this; the scene locates it in its file.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct Invalid {
+    pub key: String,
+    pub message: String,
+}
+
+impl Invalid {
+    pub fn new(key: impl Into<String>, message: impl Into<String>) -> Invalid {
+        Invalid {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+}

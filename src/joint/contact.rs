@@ -17,6 +17,7 @@
 //!   increment of B with respect to A.
 //! * Friction opposes slip: a sliding point has `r_t = −μ_k r_n u_t/‖u_t‖`.
 
+use crate::vocab::Invalid;
 use nalgebra::DMatrix;
 use thiserror::Error;
 
@@ -41,17 +42,24 @@ impl FrictionModel {
     }
 
     /// `Err` names the offending coefficient.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         if let FrictionModel::Coulomb { mu_s, mu_k } = *self {
             if !(mu_s.is_finite() && mu_s >= 0.0) {
-                return Err(format!("mu_s must be finite and >= 0, got {mu_s}"));
+                return Err(Invalid::new(
+                    "mu_s",
+                    format!("mu_s must be finite and >= 0, got {mu_s}"),
+                ));
             }
             if !(mu_k.is_finite() && mu_k >= 0.0) {
-                return Err(format!("mu_k must be finite and >= 0, got {mu_k}"));
+                return Err(Invalid::new(
+                    "mu_k",
+                    format!("mu_k must be finite and >= 0, got {mu_k}"),
+                ));
             }
             if mu_k > mu_s {
-                return Err(format!(
-                    "mu_k must be <= mu_s, got mu_k = {mu_k} > mu_s = {mu_s}"
+                return Err(Invalid::new(
+                    "mu_k",
+                    format!("mu_k must be <= mu_s, got mu_k = {mu_k} > mu_s = {mu_s}"),
                 ));
             }
         }

@@ -16,6 +16,7 @@
 // `!(x > 0.0)` is the comparison that also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::vocab::Invalid;
 use serde::{Deserialize, Serialize};
 
 use super::positive;
@@ -87,18 +88,21 @@ impl AdiabaticRise {
 
     /// Checks the parameters; the error names the offending field, e.g.
     /// `theta0 must be > 0, got -3`.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let theta0 = self.theta0();
         positive("theta0", theta0)?;
         if !(theta0 < 100.0) {
-            return Err(format!("theta0 must be < 100, got {theta0}"));
+            return Err(Invalid::new(
+                "theta0",
+                format!("theta0 must be < 100, got {theta0}"),
+            ));
         }
         match *self {
             AdiabaticRise::Exponential { m, .. } => positive("m", m),
             AdiabaticRise::Compound { a, b, .. } => {
                 positive("a", a)?;
                 if !(b > 0.0 && b <= 3.0) {
-                    return Err(format!("b must be in (0, 3], got {b}"));
+                    return Err(Invalid::new("b", format!("b must be in (0, 3], got {b}")));
                 }
                 Ok(())
             }

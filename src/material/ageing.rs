@@ -59,6 +59,7 @@
 // `!(x > 0.0)` is the comparison that also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::vocab::Invalid;
 use serde::{Deserialize, Serialize};
 
 use super::positive;
@@ -165,10 +166,13 @@ impl ModulusLaw {
     /// Checks the parameters; the error names the offending field, e.g.
     /// `e0_pa must be between 1e8 and 1e12 Pa, got 35` (a modulus typed in
     /// GPa).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let e0 = self.e0_pa;
         if !(1e8..=1e12).contains(&e0) {
-            return Err(format!("e0_pa must be between 1e8 and 1e12 Pa, got {e0}"));
+            return Err(Invalid::new(
+                "e0_pa",
+                format!("e0_pa must be between 1e8 and 1e12 Pa, got {e0}"),
+            ));
         }
         positive("a", self.a)?;
         exponent("b", self.b)
@@ -241,11 +245,12 @@ impl AutogenousLaw {
     /// Checks the parameters; the error names the offending field, e.g.
     /// `eps_inf must be a strain between -1e-3 and 1e-3, got 50` (a value
     /// typed in microstrain).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let e = self.eps_inf;
         if !(-1e-3..=1e-3).contains(&e) {
-            return Err(format!(
-                "eps_inf must be a strain between -1e-3 and 1e-3, got {e}"
+            return Err(Invalid::new(
+                "eps_inf",
+                format!("eps_inf must be a strain between -1e-3 and 1e-3, got {e}"),
             ));
         }
         positive("c", self.c)?;
@@ -266,10 +271,13 @@ impl Poisson {
     }
 
     /// `Err("poisson must be in [0, 0.5), got 0.5")` outside [0, 0.5).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let nu = self.0;
         if !(0.0..0.5).contains(&nu) {
-            return Err(format!("poisson must be in [0, 0.5), got {nu}"));
+            return Err(Invalid::new(
+                "poisson",
+                format!("poisson must be in [0, 0.5), got {nu}"),
+            ));
         }
         Ok(())
     }
@@ -332,9 +340,12 @@ impl Poisson {
 }
 
 /// `Err("{field} must be in (0, 3], got {v}")` for an age exponent.
-fn exponent(field: &str, v: f64) -> Result<(), String> {
+fn exponent(field: &str, v: f64) -> Result<(), Invalid> {
     if !(v > 0.0 && v <= 3.0) {
-        return Err(format!("{field} must be in (0, 3], got {v}"));
+        return Err(Invalid::new(
+            field,
+            format!("{field} must be in (0, 3], got {v}"),
+        ));
     }
     Ok(())
 }

@@ -84,6 +84,7 @@
 // `!(x > 0.0)` is the comparison that also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::vocab::Invalid;
 use serde::{Deserialize, Serialize};
 
 use super::ageing::{mid_step_age, AgeStepError, ModulusOfAge, Poisson};
@@ -201,20 +202,27 @@ impl CreepLaw {
     /// 0-based index, e.g. `terms\[1\].r must be > 0, got 0` or
     /// `terms\[0\].f must be in [0, 1e-6) 1/Pa, got 0.23` (a coefficient not
     /// divided by E).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         if self.terms.is_empty() {
-            return Err("terms must hold at least one creep term".to_string());
+            return Err(Invalid::new(
+                "terms",
+                "terms must hold at least one creep term",
+            ));
         }
         for (i, t) in self.terms.iter().enumerate() {
             for (name, v) in [("f", t.f), ("g", t.g)] {
                 if !(0.0..1e-6).contains(&v) {
-                    return Err(format!(
-                        "terms[{i}].{name} must be in [0, 1e-6) 1/Pa, got {v}"
+                    return Err(Invalid::new(
+                        format!("terms[{i}].{name}"),
+                        format!("terms[{i}].{name} must be in [0, 1e-6) 1/Pa, got {v}"),
                     ));
                 }
             }
             if !(0.0..=1.0).contains(&t.p) {
-                return Err(format!("terms[{i}].p must be in [0, 1], got {}", t.p));
+                return Err(Invalid::new(
+                    format!("terms[{i}].p"),
+                    format!("terms[{i}].p must be in [0, 1], got {}", t.p),
+                ));
             }
             positive(&format!("terms[{i}].r"), t.r)?;
         }

@@ -30,12 +30,16 @@ pub use pipe_cooling::{hydration_under_cooling, PipeLayout, ZhuPipe};
 /// (`must be finite` for +∞): the field check of every law's `validate`.
 // `!(v > 0.0)` is the comparison that also rejects NaN.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub(crate) fn positive(field: &str, v: f64) -> Result<(), String> {
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), Invalid> {
     if !(v > 0.0) {
-        return Err(format!("{field} must be > 0, got {v}"));
+        return Err(Invalid::new(field, format!("{field} must be > 0, got {v}")));
     }
     if !v.is_finite() {
-        return Err(format!("{field} must be finite, got {v}"));
+        return Err(Invalid::new(
+            field,
+            format!("{field} must be finite, got {v}"),
+        ));
     }
     Ok(())
 }
+use crate::vocab::Invalid;

@@ -94,6 +94,7 @@
 // `!(x > 0.0)` is the comparison that also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::vocab::Invalid;
 use serde::{Deserialize, Serialize};
 
 use super::adiabatic::AdiabaticRise;
@@ -135,7 +136,7 @@ fn default_water_specific_heat() -> f64 {
 impl PipeLayout {
     /// Checks the layout; the error names the offending field, e.g.
     /// `length_m must be > 0, got 0`.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         positive("spacing_horizontal_m", self.spacing_horizontal_m)?;
         positive("spacing_vertical_m", self.spacing_vertical_m)?;
         positive("length_m", self.length_m)?;
@@ -143,16 +144,22 @@ impl PipeLayout {
         positive("outer_radius_m", self.outer_radius_m)?;
         let half = 0.5 * self.spacing_horizontal_m.min(self.spacing_vertical_m);
         if !(self.outer_radius_m < half) {
-            return Err(format!(
-                "outer_radius_m must be < half the smaller spacing ({half}), got {}",
-                self.outer_radius_m
+            return Err(Invalid::new(
+                "outer_radius_m",
+                format!(
+                    "outer_radius_m must be < half the smaller spacing ({half}), got {}",
+                    self.outer_radius_m
+                ),
             ));
         }
         positive("inner_radius_m", self.inner_radius_m)?;
         if !(self.inner_radius_m < self.outer_radius_m) {
-            return Err(format!(
-                "inner_radius_m must be < outer_radius_m ({}), got {}",
-                self.outer_radius_m, self.inner_radius_m
+            return Err(Invalid::new(
+                "inner_radius_m",
+                format!(
+                    "inner_radius_m must be < outer_radius_m ({}), got {}",
+                    self.outer_radius_m, self.inner_radius_m
+                ),
             ));
         }
         positive("wall_conductivity_w_mk", self.wall_conductivity_w_mk)?;
@@ -239,20 +246,22 @@ impl ZhuPipe {
         layout: &PipeLayout,
         diffusivity_m2_per_day: f64,
         conductivity_w_mk: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, Invalid> {
         layout.validate()?;
         positive("diffusivity_m2_per_day", diffusivity_m2_per_day)?;
         positive("conductivity_w_mk", conductivity_w_mk)?;
         let d = Self::derive(layout, diffusivity_m2_per_day, conductivity_w_mk);
         if !(d.s >= 0.8) {
-            return Err(format!(
-                "xi = conductivity·length_m/(water_specific_heat·water_density·flow) must be <= 4.24 \
+            return Err(Invalid::new("xi", format!("xi = conductivity·length_m/(water_specific_heat·water_density·flow) must be <= 4.24 \
                  (Zhu's fit gives s < 0.8 beyond), got {}; shorten the coil or raise the flow",
                 d.xi
-            ));
+            )));
         }
         if !(d.p > 0.0 && d.p.is_finite()) {
-            return Err(format!("pipe cooling: p must be > 0, got {}", d.p));
+            return Err(Invalid::new(
+                "p",
+                format!("pipe cooling: p must be > 0, got {}", d.p),
+            ));
         }
         Ok(ZhuPipe { p: d.p, s: d.s })
     }

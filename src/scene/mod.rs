@@ -44,7 +44,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::material::{AdiabaticRise, AutogenousLaw, CreepLaw, ModulusLaw, PipeLayout};
 use crate::mesh::geometry::Geometry;
-use crate::vocab::Epoch;
+use crate::vocab::{Epoch, Invalid};
 
 pub use error::SceneError;
 pub use planner::PlannerSettings;
@@ -402,10 +402,10 @@ impl Default for SolverSettings {
 
 impl SolverSettings {
     /// Checks the values; the error names the key.
-    pub fn validate(&self) -> Result<(), (String, String)> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         if !(self.pcg_tolerance > 0.0 && self.pcg_tolerance <= 1e-6) {
-            return Err((
-                "solver.pcg_tolerance".into(),
+            return Err(Invalid::new(
+                "solver.pcg_tolerance",
                 format!(
                     "solver.pcg_tolerance must be in (0, 1e-6], got {}",
                     self.pcg_tolerance
@@ -413,15 +413,15 @@ impl SolverSettings {
             ));
         }
         if self.pcg_max_iterations == 0 {
-            return Err((
-                "solver.pcg_max_iterations".into(),
-                "solver.pcg_max_iterations must be >= 1, got 0".into(),
+            return Err(Invalid::new(
+                "solver.pcg_max_iterations",
+                "solver.pcg_max_iterations must be >= 1, got 0",
             ));
         }
         if self.contact_max_iterations == 0 {
-            return Err((
-                "solver.contact_max_iterations".into(),
-                "solver.contact_max_iterations must be >= 1, got 0".into(),
+            return Err(Invalid::new(
+                "solver.contact_max_iterations",
+                "solver.contact_max_iterations must be >= 1, got 0",
             ));
         }
         Ok(())

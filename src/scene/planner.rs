@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::vocab::ZonePoint;
+use crate::vocab::{Invalid, ZonePoint};
 
 /// Readiness rules and remedy search (`[planner]`, every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -94,10 +94,13 @@ impl PlannerSettings {
     }
 
     /// Checks the values; the error names the key and what was expected.
-    pub fn validate(&self) -> Result<(), (String, String)> {
+    pub fn validate(&self) -> Result<(), Invalid> {
         let key = |k: &str| format!("planner.{k}");
         let bad = |k: &str, what: &str, v: f64| {
-            Err((key(k), format!("planner.{k} must be {what}, got {v}")))
+            Err(Invalid::new(
+                key(k),
+                format!("planner.{k} must be {what}, got {v}"),
+            ))
         };
         if !(self.min_aperture_mm.is_finite() && self.min_aperture_mm > 0.0) {
             return bad("min_aperture_mm", "> 0", self.min_aperture_mm);
@@ -116,13 +119,13 @@ impl PlannerSettings {
         }
         for (i, q) in self.closure_temp_profile.iter().enumerate() {
             if !(q[0].is_finite() && q[1].is_finite() && (-10.0..=40.0).contains(&q[1])) {
-                return Err((
+                return Err(Invalid::new(
                     key("closure_temp_profile"),
                     format!("planner.closure_temp_profile[{i}] must be [z_m, temp_c] with temp_c within -10..40 °C, got [{}, {}]", q[0], q[1]),
                 ));
             }
             if i > 0 && q[0] <= self.closure_temp_profile[i - 1][0] {
-                return Err((
+                return Err(Invalid::new(
                     key("closure_temp_profile"),
                     format!(
                         "planner.closure_temp_profile: elevations must increase, {} follows {}",
@@ -165,15 +168,15 @@ impl PlannerSettings {
             return bad("cost_per_day", ">= 0", self.cost_per_day);
         }
         if self.horizon_days == Some(0) {
-            return Err((
+            return Err(Invalid::new(
                 key("horizon_days"),
-                "planner.horizon_days must be >= 1, got 0".into(),
+                "planner.horizon_days must be >= 1, got 0",
             ));
         }
         if self.checkpoint_days == 0 {
-            return Err((
+            return Err(Invalid::new(
                 key("checkpoint_days"),
-                "planner.checkpoint_days must be >= 1, got 0".into(),
+                "planner.checkpoint_days must be >= 1, got 0",
             ));
         }
         Ok(())

@@ -3,6 +3,7 @@
 
 use crate::material::{AdiabaticRise, PipeLayout};
 use crate::mesh::geometry::{ArchGeometry, BlocksGeometry, Geometry};
+use crate::vocab::Invalid;
 
 use super::{
     Air, Effect, JointSettings, Reservoir, Rock, Scene, SceneError, ThermalProperties, TimeStepping,
@@ -27,10 +28,10 @@ pub(super) fn validate(s: &Scene) -> Check {
         Geometry::Arch(g) => arch(g, s)?,
     }
     time(&s.time, s)?;
-    if let Err((key, message)) = s.solver.validate() {
+    if let Err(Invalid { key, message }) = s.solver.validate() {
         return Err(SceneError::invalid(&key, message));
     }
-    if let Err((key, message)) = s.planner.validate() {
+    if let Err(Invalid { key, message }) = s.planner.validate() {
         return Err(SceneError::invalid(&key, message));
     }
     for d in &s.output.snapshots {

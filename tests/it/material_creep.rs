@@ -571,7 +571,7 @@ fn laws_parse_from_toml_and_reject_unknown_keys() {
 fn zhu_typical_matches_the_quoted_formula() {
     let e2 = 35e9;
     let law = CreepLaw::zhu_typical(e2);
-    assert!(law.validate().is_ok());
+    assert!(law.validate().map_err(|e| e.message).is_ok());
     for &(t, tau) in &[(8.0, 3.0), (60.0, 28.0), (400.0, 90.0)] {
         let d: f64 = t - tau;
         let want = 0.23 / e2 * (1.0 + 9.20 * tau.powf(-0.45)) * (1.0 - (-0.30 * d).exp())
@@ -592,7 +592,7 @@ fn zhu_typical_matches_the_quoted_formula() {
 
 #[test]
 fn validation_messages_name_the_field() {
-    let m = |e0_pa, a, b| ModulusLaw { e0_pa, a, b }.validate();
+    let m = |e0_pa, a, b| ModulusLaw { e0_pa, a, b }.validate().map_err(|e| e.message);
     assert_eq!(m(35e9, 0.4, 0.34), Ok(()));
     assert_eq!(
         m(35.0, 0.4, 0.34),
@@ -612,7 +612,11 @@ fn validation_messages_name_the_field() {
         Err("b must be in (0, 3], got 0".to_string())
     );
 
-    let g = |eps_inf, c, d| AutogenousLaw { eps_inf, c, d }.validate();
+    let g = |eps_inf, c, d| {
+        AutogenousLaw { eps_inf, c, d }
+            .validate()
+            .map_err(|e| e.message)
+    };
     assert_eq!(g(-50e-6, 0.2, 0.6), Ok(()));
     assert_eq!(g(0.0, 0.2, 0.6), Ok(()));
     assert_eq!(
@@ -628,13 +632,13 @@ fn validation_messages_name_the_field() {
         Err("d must be in (0, 3], got 4".to_string())
     );
 
-    assert_eq!(Poisson(0.167).validate(), Ok(()));
+    assert_eq!(Poisson(0.167).validate().map_err(|e| e.message), Ok(()));
     assert_eq!(
-        Poisson(0.5).validate(),
+        Poisson(0.5).validate().map_err(|e| e.message),
         Err("poisson must be in [0, 0.5), got 0.5".to_string())
     );
     assert_eq!(
-        Poisson(-0.1).validate(),
+        Poisson(-0.1).validate().map_err(|e| e.message),
         Err("poisson must be in [0, 0.5), got -0.1".to_string())
     );
 
@@ -644,7 +648,7 @@ fn validation_messages_name_the_field() {
         p: 0.45,
         r: 0.3,
     };
-    let law = |t: Vec<CreepTerm>| CreepLaw { terms: t }.validate();
+    let law = |t: Vec<CreepTerm>| CreepLaw { terms: t }.validate().map_err(|e| e.message);
     assert_eq!(law(vec![term]), Ok(()));
     assert_eq!(
         law(vec![]),
@@ -673,5 +677,10 @@ fn validation_messages_name_the_field() {
         }]),
         Err("terms[0].r must be > 0, got NaN".to_string())
     );
-    assert_eq!(CreepLaw::non_ageing(2.0, 0.3, 20e9).validate(), Ok(()));
+    assert_eq!(
+        CreepLaw::non_ageing(2.0, 0.3, 20e9)
+            .validate()
+            .map_err(|e| e.message),
+        Ok(())
+    );
 }

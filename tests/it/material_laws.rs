@@ -109,9 +109,21 @@ fn rates_at_and_before_the_pour() {
 
 #[test]
 fn rise_validation_names_the_field() {
-    let e = |theta0, m| AdiabaticRise::Exponential { theta0, m }.validate();
-    let c = |a, b| AdiabaticRise::Compound { theta0: 25.0, a, b }.validate();
-    let h = |n| AdiabaticRise::Hyperbolic { theta0: 25.0, n }.validate();
+    let e = |theta0, m| {
+        AdiabaticRise::Exponential { theta0, m }
+            .validate()
+            .map_err(|e| e.message)
+    };
+    let c = |a, b| {
+        AdiabaticRise::Compound { theta0: 25.0, a, b }
+            .validate()
+            .map_err(|e| e.message)
+    };
+    let h = |n| {
+        AdiabaticRise::Hyperbolic { theta0: 25.0, n }
+            .validate()
+            .map_err(|e| e.message)
+    };
     assert_eq!(e(-3.0, 0.3), Err("theta0 must be > 0, got -3".to_string()));
     assert_eq!(e(0.0, 0.3), Err("theta0 must be > 0, got 0".to_string()));
     assert_eq!(
@@ -131,7 +143,7 @@ fn rise_validation_names_the_field() {
     assert_eq!(c(0.4, 3.0), Ok(()));
     assert_eq!(e(99.9, 0.3), Ok(()));
     for r in [&EXP, &COMP, &HYP] {
-        assert_eq!(r.validate(), Ok(()));
+        assert_eq!(r.validate().map_err(|e| e.message), Ok(()));
     }
 }
 
@@ -153,11 +165,11 @@ fn layout() -> PipeLayout {
 
 #[test]
 fn layout_validation_names_the_field() {
-    assert_eq!(layout().validate(), Ok(()));
+    assert_eq!(layout().validate().map_err(|e| e.message), Ok(()));
     let bad = |f: &dyn Fn(&mut PipeLayout)| {
         let mut l = layout();
         f(&mut l);
-        l.validate().unwrap_err()
+        l.validate().map_err(|e| e.message).unwrap_err()
     };
     assert_eq!(
         bad(&|l| l.spacing_horizontal_m = 0.0),
@@ -313,22 +325,22 @@ fn cylinder_eigenvalue_matches_mpmath() {
 fn try_new_checks_inputs_and_xi_range() {
     let l = layout();
     assert_eq!(
-        ZhuPipe::try_new(&l, 0.1, 2.0),
+        ZhuPipe::try_new(&l, 0.1, 2.0).map_err(|e| e.message),
         Ok(ZhuPipe::new(&l, 0.1, 2.0))
     );
     assert_eq!(
-        ZhuPipe::try_new(&l, 0.0, 2.0),
+        ZhuPipe::try_new(&l, 0.0, 2.0).map_err(|e| e.message),
         Err("diffusivity_m2_per_day must be > 0, got 0".to_string())
     );
     let mut bad = l.clone();
     bad.length_m = -1.0;
     assert_eq!(
-        ZhuPipe::try_new(&bad, 0.1, 2.0),
+        ZhuPipe::try_new(&bad, 0.1, 2.0).map_err(|e| e.message),
         Err("length_m must be > 0, got -1".to_string())
     );
     let mut long = l.clone();
     long.length_m = 5000.0; // ξ = 7.2
-    let err = ZhuPipe::try_new(&long, 0.1, 2.0).unwrap_err();
+    let err = ZhuPipe::try_new(&long, 0.1, 2.0).unwrap_err().message;
     assert!(err.starts_with("xi = "), "{err}");
     assert!(err.contains("got 7.16"), "{err}");
 }
