@@ -8,7 +8,7 @@
 //! schedules repeats the uninterrupted run exactly: the live systems are
 //! renumbered and refactorised from the same data, and the steps land on the
 //! same days. With edited schedules it is exact as long as every edit is on or
-//! after the checkpoint's day ([`crate::planner::restart`] picks it).
+//! after the checkpoint's day (the planner's runner and `app::restart` pick it).
 //!
 //! On disk both are postcard (compact binary serde) files.
 
