@@ -26,9 +26,14 @@ enum Command {
         /// Schedules folder (default: the scene's `schedules`).
         #[arg(long)]
         schedules: Option<PathBuf>,
-        /// Run folder to write (default: runs/<scene name>).
+        /// Run folder to write (default: runs/<scene name>): a new or empty
+        /// folder, or an earlier run folder, which is replaced.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Replace --out even when it is a file or holds files groutready
+        /// did not write (they are deleted).
+        #[arg(long)]
+        force: bool,
     },
     /// Readiness of every grouting zone on its planned date, remedies for the
     /// zones that are not groutable, and a report (the weekly job).
@@ -70,10 +75,15 @@ struct PlanArgs {
     /// Schedules folder (default: the scene's `schedules`).
     #[arg(long)]
     schedules: Option<PathBuf>,
-    /// Run folder to write (default: runs/<scene name>); its checkpoints
-    /// are reused when the scene is unchanged.
+    /// Run folder to write (default: runs/<scene name>): a new or empty
+    /// folder, or an earlier run folder, which is replaced (its checkpoints
+    /// are reused when the scene is unchanged, its whatif/ is kept).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Replace --out even when it is a file or holds files groutready did
+    /// not write (they are deleted).
+    #[arg(long)]
+    force: bool,
     /// Zones planned before this date (YYYY-MM-DD) are history (default:
     /// the day after the last zone marked done in grouting.csv, else today).
     #[arg(long, value_parser = parse_date)]
@@ -136,6 +146,9 @@ enum ScheduleCommand {
         scene: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// Overwrite the schedule files already in --out.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -197,7 +210,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             scene,
             schedules,
             out,
-        } => run(scene, schedules, out),
+            force,
+        } => run(scene, schedules, out, force),
         Command::Plan {
             scene,
             args,
@@ -218,8 +232,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 },
         } => study_perf(scenes, quick, days, solver.as_deref(), complete_mechanics),
         Command::Schedule {
-            what: ScheduleCommand::Synth { scene, out },
-        } => schedule_synth(&scene, &out),
+            what: ScheduleCommand::Synth { scene, out, force },
+        } => schedule_synth(&scene, &out, force),
     }
 }
 
@@ -228,10 +242,12 @@ fn run(
     scene: Option<PathBuf>,
     schedules: Option<PathBuf>,
     out: Option<PathBuf>,
+    force: bool,
 ) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = out.unwrap_or_else(|| default_out(&scene));
     let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+    let out = prepare_out(&out, &inputs, force)?;
     eprintln!(
         "{}: {} elements, {} thermal dofs, {} pours, effects {:?}",
         inputs.scene.name,
@@ -257,6 +273,7 @@ fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
     let inputs = app::load_inputs(&scene, args.schedules.as_deref())?;
+    let out = prepare_out(&out, &inputs, args.force)?;
     eprintln!(
         "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
         inputs.scene.name,
@@ -352,9 +369,19 @@ fn study_perf(
     Ok(0)
 }
 
+/// Checks and locks the run folder before anything is simulated, and says
+/// what was cleaned on the way.
+fn prepare_out(out: &Path, inputs: &app::Inputs, force: bool) -> anyhow::Result<app::OutDir> {
+    let dir = app::OutDir::prepare(out, inputs, force)?;
+    for note in dir.notes() {
+        eprintln!("note: {note}");
+    }
+    Ok(dir)
+}
+
 /// `groutready schedule synth`: write a plausible schedule set for a scene.
-fn schedule_synth(scene: &Path, out: &Path) -> anyhow::Result<u8> {
-    let n = groutready::study::synth_schedules(scene, out)?;
+fn schedule_synth(scene: &Path, out: &Path, force: bool) -> anyhow::Result<u8> {
+    let n = groutready::study::synth_schedules(scene, out, force)?;
     println!("wrote {n} rows to {}", out.display());
     Ok(0)
 }
@@ -370,6 +397,7 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
             ("--as-of", args.as_of.is_some()),
             ("--horizon-days", args.horizon_days.is_some()),
             ("--from-scratch", args.from_scratch),
+            ("--force", args.force),
         ];
         if let Some((flag, _)) = scene_only.iter().find(|f| f.1) {
             anyhow::bail!(
@@ -394,6 +422,7 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
             ));
             s
         } else {
+            let out = prepare_out(&out, &inputs, args.force)?;
             Session::plan(inputs, out, request, color)
         }
     };

@@ -1,6 +1,8 @@
 //! What `groutready run` does, as a library call: load and check every input,
-//! only then simulate, and write the run folder atomically.
+//! check where the run folder goes ([`out::OutDir`]), only then simulate,
+//! and write the run folder atomically.
 
+pub mod out;
 pub mod plan;
 pub mod restart;
 
@@ -12,6 +14,8 @@ use crate::scene::Scene;
 use crate::schedule::{self, Schedules};
 use crate::sim::{RunStats, Simulation};
 use crate::vocab::Day;
+
+pub use out::OutDir;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AppError {
@@ -34,6 +38,8 @@ pub enum AppError {
     Checkpoint(#[from] crate::sim::checkpoint::CheckpointError),
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
+    #[error(transparent)]
+    Out(#[from] out::OutError),
     #[error("{path}: {source}")]
     Io {
         path: String,
@@ -52,6 +58,8 @@ pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AppError + '
 pub struct Inputs {
     pub scene_path: PathBuf,
     pub scene: Scene,
+    /// the folder the schedules were read from
+    pub schedules_dir: PathBuf,
     pub schedules: Schedules,
     pub mesh: Mesh,
 }
@@ -86,6 +94,7 @@ pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<In
     Ok(Inputs {
         scene_path: scene_path.to_path_buf(),
         scene,
+        schedules_dir: dir,
         schedules,
         mesh,
     })
@@ -103,14 +112,16 @@ pub struct RunSummary {
     pub snapshots: usize,
 }
 
-/// Runs the simulation and writes the run folder `out` atomically.
+/// Runs the simulation and writes the run folder `out` (checked and locked
+/// by [`OutDir::prepare`]) atomically.
 pub fn run(
     inputs: &Inputs,
-    out: &Path,
+    out: &OutDir,
     progress: &mut dyn FnMut(f64, f64),
 ) -> Result<RunSummary, AppError> {
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules)?;
-    let staging = RunDir::create(out).map_err(io_err(out))?;
+    let dest = out.dest();
+    let staging = RunDir::create(dest).map_err(io_err(dest))?;
     let fields = staging.path().join("fields");
     std::fs::create_dir_all(&fields).map_err(io_err(&fields))?;
     let mut written: Vec<(f64, String)> = Vec::new();
@@ -151,9 +162,9 @@ pub fn run(
     let summary = staging.path().join("run.txt");
     std::fs::write(&summary, run_text(inputs, &stats)).map_err(io_err(&summary))?;
     let snapshots = written.len();
-    let out = staging.commit().map_err(io_err(out))?;
+    staging.commit().map_err(io_err(dest))?;
     Ok(RunSummary {
-        out,
+        out: out.path().to_path_buf(),
         stats,
         elements: inputs.mesh.elements.len(),
         thermal_dofs: inputs.mesh.n_thermal_dofs,

@@ -13,7 +13,7 @@ use crate::schedule;
 use crate::vocab::ZoneId;
 
 use super::restart;
-use super::{io_err, run_text, AppError, Inputs};
+use super::{io_err, run_text, AppError, Inputs, OutDir};
 
 /// Options of one plan.
 #[derive(Debug, Clone, Default)]
@@ -63,9 +63,12 @@ pub struct PlanSummary {
 /// The folder of the remedied schedules inside a run folder.
 pub const REMEDIED_DIR: &str = "remedied";
 
+/// Plans `inputs` into the run folder `out` (checked and locked by
+/// [`OutDir::prepare`]): restarts from its checkpoints, and carries its
+/// saved what-ifs into the new run folder.
 pub fn plan(
     inputs: &Inputs,
-    out: &Path,
+    out: &OutDir,
     request: &PlanRequest,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<PlanSummary, AppError> {
@@ -86,10 +89,11 @@ pub fn plan(
     let as_of = options.as_of;
     // The restart may not be later than this plan's own end.
     let end = options.end_day(epoch, &inputs.schedules);
+    let dest = out.dest();
     let previous = if request.from_scratch {
         None
     } else {
-        restart::find(out, scene, &inputs.schedules, end)?
+        restart::find(dest, scene, &inputs.schedules, end)?
     };
     let prev_dir = previous.as_ref().map(|p| p.dir.clone());
     let out_plan = planner::plan(
@@ -101,7 +105,7 @@ pub fn plan(
         progress,
     )?;
 
-    let staging = RunDir::create(out).map_err(io_err(out))?;
+    let staging = RunDir::create(dest).map_err(io_err(dest))?;
     let dir = staging.path();
     crate::report::write_all(dir, &out_plan.plan)?;
     let h = &out_plan.history;
@@ -138,9 +142,9 @@ pub fn plan(
     restart::save_plan(dir, scene, &out_plan.plan)?;
     let p = dir.join("run.txt");
     std::fs::write(&p, run_text(inputs, &out_plan.baseline)).map_err(io_err(&p))?;
-    let out = staging.commit().map_err(io_err(out))?;
+    staging.commit().map_err(io_err(dest))?;
     Ok(PlanSummary {
-        out,
+        out: out.path().to_path_buf(),
         remedied: out_plan.remedied.is_some(),
         newly_flagged: out_plan
             .newly_flagged

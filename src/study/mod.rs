@@ -60,6 +60,9 @@ pub enum StudyError {
     },
     #[error("--solver: expected cholesky, pcg or both, found {0:?}")]
     Solver(String),
+    /// `schedule synth` onto a folder that already holds schedules.
+    #[error("{path}: already holds {files}; schedule synth would overwrite them (give --out another folder, or add --force to overwrite)")]
+    WouldOverwrite { path: String, files: String },
 }
 
 /// The thermal solvers a `--solver` value names (`cholesky`, `pcg` or
@@ -408,8 +411,36 @@ fn synthesize_for(scene: &Scene, mesh: &crate::mesh::Mesh) -> schedule::Schedule
     s
 }
 
-/// Writes a synthesised schedule set for a scene; returns the number of rows.
-pub fn synth_schedules(scene_path: &Path, out: &Path) -> Result<usize, StudyError> {
+/// The schedule files already in `dir` (a synthesised set would replace
+/// or contradict them).
+fn existing_schedules(dir: &Path) -> Vec<&'static str> {
+    use schedule::{
+        COOLING_CSV, GROUTING_CSV, JOINT_METERS_CSV, POURS_CSV, RESERVOIR_CSV, WEATHER_CSV,
+    };
+    [
+        POURS_CSV,
+        COOLING_CSV,
+        GROUTING_CSV,
+        RESERVOIR_CSV,
+        WEATHER_CSV,
+        JOINT_METERS_CSV,
+    ]
+    .into_iter()
+    .filter(|f| dir.join(f).exists())
+    .collect()
+}
+
+/// Writes a synthesised schedule set for a scene; returns the number of
+/// rows. Refuses a folder that already holds schedule files (the site's
+/// edited schedules) unless `force`.
+pub fn synth_schedules(scene_path: &Path, out: &Path, force: bool) -> Result<usize, StudyError> {
+    let found = existing_schedules(out);
+    if !found.is_empty() && !force {
+        return Err(StudyError::WouldOverwrite {
+            path: out.display().to_string(),
+            files: found.join(", "),
+        });
+    }
     let scene = Scene::load(scene_path)?;
     let mesh = app::build_mesh(&scene, &scene_path.display().to_string())?;
     let s = synthesize_for(&scene, &mesh);

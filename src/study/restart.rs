@@ -21,10 +21,12 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
                 quiet: &mut dyn FnMut(crate::planner::Progress)|
      -> Result<(f64, crate::planner::Plan), StudyError> {
         let t = Instant::now();
-        let s = app::plan::plan(inputs, out, req, quiet).map_err(|source| StudyError::Plan {
+        let plan_err = |source: app::AppError| StudyError::Plan {
             scene: scene.display().to_string(),
             source: Box::new(source),
-        })?;
+        };
+        let out = app::OutDir::prepare(out, inputs, false).map_err(|e| plan_err(e.into()))?;
+        let s = app::plan::plan(inputs, &out, req, quiet).map_err(plan_err)?;
         Ok((t.elapsed().as_secs_f64(), s.plan))
     };
     let scratch = PlanRequest {

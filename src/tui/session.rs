@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::app::plan::PlanRequest;
-use crate::app::Inputs;
+use crate::app::{Inputs, OutDir};
 use crate::planner::whatif::WhatIf;
 use crate::planner::Progress;
 use crate::schedule::{self, Schedules};
@@ -19,8 +19,9 @@ use super::app::App;
 use super::data::RunData;
 use super::event::{Command, Event, JobEvent};
 
-/// Folder of the what-if schedule sets inside a run folder.
-pub const WHATIF_DIR: &str = "whatif";
+/// Folder of the what-if schedule sets inside a run folder (carried over
+/// when the folder is planned again).
+pub use crate::output::run_dir::WHATIF_DIR;
 
 /// Events of the plan job carry id 0; each what-if has its own id, so a
 /// cancelled job's last words cannot reach the job after it.
@@ -48,8 +49,8 @@ impl Session {
     }
 
     /// A session that plans `inputs` into `out` first (in the background),
-    /// then opens it.
-    pub fn plan(inputs: Inputs, out: PathBuf, request: PlanRequest, color: bool) -> Session {
+    /// then opens it; the folder stays locked until the plan is written.
+    pub fn plan(inputs: Inputs, out: OutDir, request: PlanRequest, color: bool) -> Session {
         let (tx, rx) = channel();
         let app = App::planning(&inputs.scene.name, color);
         let t = tx.clone();

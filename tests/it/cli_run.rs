@@ -86,7 +86,13 @@ fn run_writes_temperatures_apertures_and_snapshots() {
 
     only(
         &out,
-        &["apertures.csv", "fields", "run.txt", "temperatures.csv"],
+        &[
+            ".groutready-run",
+            "apertures.csv",
+            "fields",
+            "run.txt",
+            "temperatures.csv",
+        ],
     );
     let fields = out.join("fields");
     let pvd = std::fs::read_to_string(fields.join("fields.pvd")).unwrap();

@@ -21,6 +21,7 @@ mod material_creep;
 mod material_laws;
 mod mechanics_staged;
 mod mesh_generators;
+mod out_safety;
 mod planner_supercool;
 mod report_files;
 mod restart;
