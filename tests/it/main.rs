@@ -23,6 +23,7 @@ mod mechanics_staged;
 mod mesh_generators;
 mod planner_supercool;
 mod report_files;
+mod reproducible;
 mod restart;
 mod scene_errors;
 mod schedule_errors;
