@@ -1,6 +1,6 @@
 //! The mechanical model of the live elements and its incremental step.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -143,7 +143,7 @@ pub struct MechanicsModel {
     node_xyz: Vec<[f64; 3]>,
     elements: Vec<[u32; 8]>,
     thermal_dof: Vec<u32>,
-    lift_elems: HashMap<(u32, u32), Vec<u32>>,
+    lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
     supported: Vec<bool>,
     /// displacement increments of supported dofs for the next step (global dof, value)
     prescribed: Vec<(u32, f64)>,

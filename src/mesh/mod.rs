@@ -61,7 +61,7 @@ pub mod geometry;
 mod grid;
 pub mod vtu;
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
@@ -401,9 +401,10 @@ impl Mesh {
 
     /// [`Mesh::elements_of_lift`] of every lift that has elements, keyed by
     /// (block, lift): the owned copy the physics models keep, since they
-    /// outlive their borrow of the mesh.
-    pub fn lift_elements(&self) -> HashMap<(u32, u32), Vec<u32>> {
-        let mut map = HashMap::new();
+    /// outlive their borrow of the mesh. Ordered, so that a model iterating
+    /// it visits the lifts in the same order in every process.
+    pub fn lift_elements(&self) -> BTreeMap<(u32, u32), Vec<u32>> {
+        let mut map = BTreeMap::new();
         for (b, (_, offsets)) in self.index().blocks.iter().enumerate() {
             let block = b as u32 + 1;
             for lift in 1..offsets.len() as u32 {

@@ -90,6 +90,8 @@ pub fn search(
     };
     // The two searches are independent: the delay search runs beside the
     // supercooling search (the simulations are single-threaded at this size).
+    // Each returns its own findings, joined by name below, so the outcome
+    // does not depend on which finishes first.
     let (supercool, delay) = std::thread::scope(|sc| {
         let delay = sc.spawn(|| {
             let mut quiet = |_: &str| {};

@@ -1,6 +1,11 @@
 //! The staged driver: lifts are born on their pour dates, cooling stages start
 //! and stop on theirs, and the enabled physics advance step by step between
 //! events ([`timeline`]). Results are recorded at whole-day step ends.
+//!
+//! A run is bit-identical for a given build, machine and rayon thread count,
+//! in one process or in several: no hash map's order reaches a result, and
+//! the parallel factorisations of large systems are deterministic per thread
+//! count (docs/ARCHITECTURE.md, "Reproducibility"; `tests/it/reproducible.rs`).
 
 pub mod checkpoint;
 pub mod snapshot;

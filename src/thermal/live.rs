@@ -8,7 +8,7 @@
 //! rebuild, so a run's factorisation count is (rebuilds × distinct Δt), which
 //! the benchmark prints.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use nalgebra::SMatrix;
@@ -61,7 +61,7 @@ impl FaceCounter {
     }
 
     /// Exposed faces except those on the far model boundary (adiabatic).
-    pub fn exposed(&self, far: &HashMap<(u32, u8), SurfaceKind>) -> Vec<ExposedFace> {
+    pub fn exposed(&self, far: &BTreeMap<(u32, u8), SurfaceKind>) -> Vec<ExposedFace> {
         let mut out: Vec<ExposedFace> = self
             .faces
             .values()

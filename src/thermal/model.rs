@@ -1,6 +1,6 @@
 //! The staged transient heat problem of the live elements.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -102,14 +102,17 @@ pub struct ThermalModel {
     settings: ThermalSettings,
     air: Option<AirTemperature>,
     water: Option<Water>,
-    surface_kind: HashMap<(u32, u8), SurfaceKind>,
+    surface_kind: BTreeMap<(u32, u8), SurfaceKind>,
     dof_z: Vec<f64>,
     dof_xyz: Vec<[f64; 3]>,
-    lift_elems: HashMap<(u32, u32), Vec<u32>>,
-    lift_pour_day: HashMap<(u32, u32), f64>,
+    lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
+    /// (block, lift) → pour day. Ordered: [`ThermalModel::sources`] adds the
+    /// lifts' heat into shared dofs in this order, and a hash map's order
+    /// (random per process) would change the sums' round-off run to run.
+    lift_pour_day: BTreeMap<(u32, u32), f64>,
     pub stages: Vec<PlannedStage>,
     /// per lift, index of the stage running on it
-    lift_stage: HashMap<(u32, u32), usize>,
+    lift_stage: BTreeMap<(u32, u32), usize>,
     faces: FaceCounter,
     /// the system of the live set at the last rebuild (empty before the
     /// first step and after a restore)
@@ -159,9 +162,9 @@ impl ThermalModel {
             dof_z,
             dof_xyz,
             lift_elems: mesh.lift_elements(),
-            lift_pour_day: HashMap::new(),
+            lift_pour_day: BTreeMap::new(),
             stages,
-            lift_stage: HashMap::new(),
+            lift_stage: BTreeMap::new(),
             faces: FaceCounter::default(),
             sys: LiveSystem::empty(mesh.n_thermal_dofs),
             dirty: true,
@@ -319,12 +322,11 @@ impl ThermalModel {
     /// they were planned (to match statuses to a new cooling.csv) and the
     /// pour days.
     pub fn checkpoint(&self) -> ThermalCheckpoint {
-        let mut lift_pour_day: Vec<(u32, u32, f64)> = self
+        let lift_pour_day: Vec<(u32, u32, f64)> = self
             .lift_pour_day
             .iter()
             .map(|(&(b, l), &d)| (b, l, d))
             .collect();
-        lift_pour_day.sort_by_key(|&(b, l, _)| (b, l));
         ThermalCheckpoint {
             state: self.state.clone(),
             stages: self.stages.clone(),
@@ -339,7 +341,7 @@ impl ThermalModel {
     /// (the caller restarts before the first changed date) and is pending.
     pub fn restore(&mut self, ck: &ThermalCheckpoint) {
         let key = |st: &PlannedStage| (st.block, st.lift_from, st.lift_to, st.start_day.to_bits());
-        let old: HashMap<_, &StageStatus> = ck
+        let old: BTreeMap<_, &StageStatus> = ck
             .stages
             .iter()
             .zip(&ck.state.status)
@@ -559,6 +561,8 @@ impl ThermalModel {
         if rise.is_none() && self.settings.pipe.is_none() {
             return out;
         }
+        // In (block, lift) order: lifts share the dofs of their common faces,
+        // so the order of the additions below is part of the answer.
         for (&(block, lift), &pour_day) in &self.lift_pour_day {
             if pour_day > t0 {
                 continue;

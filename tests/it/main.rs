@@ -24,6 +24,7 @@ mod mesh_generators;
 mod out_safety;
 mod planner_supercool;
 mod report_files;
+mod reproducible;
 mod restart;
 mod scene_errors;
 mod schedule_errors;

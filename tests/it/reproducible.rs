@@ -1,0 +1,185 @@
+//! A run is bit-reproducible for a given build and thread count
+//! (docs/ARCHITECTURE.md, "Reproducibility"): the small dam with joints and
+//! friction, shortened to a few days after its first groutings (stick, slip,
+//! grouted and open labels all occur), run twice in this process and twice
+//! as separate `groutready run` processes.
+//!
+//! An iteration over a `HashMap` shows in both pairs: every process draws
+//! fresh random hash keys, and within a process every map gets keys of its
+//! own. The separate processes also cover whatever a process sets up once.
+//! The CSVs round to 0.1 µm and 1 mK, so the snapshot (full-precision binary
+//! fields) is compared too.
+
+use std::path::{Path, PathBuf};
+
+use groutready::app::{self, Inputs};
+use groutready::sim::{History, Simulation};
+use groutready::vocab::JointState;
+
+use crate::common::{bin, repo};
+
+/// Last day of the shortened runs: a few days after the first groutings
+/// (2024-05-26..28), so that grouted, stick and slip points exist.
+const END_DATE: &str = "2024-06-01";
+/// The snapshot date of the shortened runs.
+const SNAPSHOT_DATE: &str = "2024-05-31";
+
+fn inputs() -> Inputs {
+    app::load_inputs(&repo("models/small_dam_joints.toml"), None).unwrap()
+}
+
+/// One in-process run to [`END_DATE`]: its histories, and the histories
+/// and the final state serialised (postcard writes every f64 as its bits,
+/// and a NaN of a point not yet poured equals itself there).
+fn run_in_process(inputs: &Inputs) -> (History, Vec<u8>) {
+    let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+    let end = inputs.scene.epoch.day(END_DATE.parse().unwrap());
+    sim.set_end_day(end);
+    sim.run(None, &mut |_, _| {}).unwrap();
+    let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
+    (sim.history(), bits)
+}
+
+/// The labels that differ, the largest aperture difference [m] and the
+/// largest zone-point temperature difference [°C] between two histories of
+/// the same run: what a failure reports.
+fn differences(a: &History, b: &History) -> (usize, usize, f64, f64) {
+    let (mut labels, mut total, mut aperture, mut temperature) = (0, 0, 0.0f64, 0.0f64);
+    for (ra, rb) in a.joint_records.rows.iter().zip(&b.joint_records.rows) {
+        for (sa, sb) in ra.1.iter().zip(&rb.1) {
+            if let (Some(sa), Some(sb)) = (sa, sb) {
+                total += 1;
+                labels += usize::from(sa.state != sb.state);
+                aperture = aperture.max((sa.aperture - sb.aperture).abs());
+            }
+        }
+    }
+    for (ra, rb) in a.records.rows.iter().zip(&b.records.rows) {
+        for (ta, tb) in ra.1.iter().zip(&rb.1) {
+            if ta.is_finite() && tb.is_finite() {
+                temperature = temperature.max((ta - tb).abs());
+            }
+        }
+    }
+    (labels, total, aperture, temperature)
+}
+
+/// Two runs in one process, side by side, give the same bits: histories
+/// (apertures, labels, temperatures) and the final state.
+#[test]
+fn reproducible_in_one_process() {
+    let inputs = inputs();
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(|| run_in_process(&inputs));
+        let b = run_in_process(&inputs);
+        (a.join().unwrap(), b)
+    });
+    let states: Vec<JointState> =
+        a.0.joint_records
+            .rows
+            .iter()
+            .flat_map(|r| r.1.iter().flatten().map(|s| s.state))
+            .collect();
+    for s in [JointState::Stick, JointState::Slip, JointState::Grouted] {
+        assert!(
+            states.contains(&s),
+            "no {s:?} point: the test misses friction"
+        );
+    }
+    let (labels, total, da, dt) = differences(&a.0, &b.0);
+    assert!(
+        a.1 == b.1,
+        "two runs differ: {labels} of {total} labels, apertures by {da:.3e} m, \
+         zone temperatures by {dt:.3e} °C"
+    );
+}
+
+/// The small dam scene shortened to [`END_DATE`] with a snapshot on
+/// [`SNAPSHOT_DATE`], written into `dir`.
+fn short_scene(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(repo("models/small_dam_joints.toml")).unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.starts_with("snapshots =") {
+            out.push_str(&format!("snapshots = [{SNAPSHOT_DATE}]\n"));
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+        if line == "[time]" {
+            out.push_str(&format!("end_date = {END_DATE}\n"));
+        }
+    }
+    let path = dir.join("short.toml");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// Every file of a run folder but `run.txt` (it holds the wall time), by
+/// relative path.
+fn run_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    for rel in ["apertures.csv", "temperatures.csv"] {
+        files.push((rel.to_string(), std::fs::read(dir.join(rel)).unwrap()));
+    }
+    let mut fields: Vec<_> = std::fs::read_dir(dir.join("fields"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    fields.sort();
+    for p in fields {
+        let rel = format!("fields/{}", p.file_name().unwrap().to_string_lossy());
+        files.push((rel, std::fs::read(&p).unwrap()));
+    }
+    files
+}
+
+/// Two `groutready run` processes (each with its own hasher seeds, running
+/// at the same time) write the same bytes.
+#[test]
+fn reproducible_across_processes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = short_scene(tmp.path());
+    let outs = [tmp.path().join("A"), tmp.path().join("B")];
+    let children: Vec<_> = outs
+        .iter()
+        .map(|out| {
+            bin()
+                .arg("run")
+                .arg(&scene)
+                .arg("--schedules")
+                .arg(repo("schedules/small_dam"))
+                .arg("--out")
+                .arg(out)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for child in children {
+        let o = child.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let (a, b) = (run_files(&outs[0]), run_files(&outs[1]));
+    assert_eq!(
+        a.len(),
+        4,
+        "apertures, temperatures, the pvd and one snapshot"
+    );
+    let names = |f: &[(String, Vec<u8>)]| f.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&a), names(&b));
+    let differing: Vec<String> = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| x.1 != y.1)
+        .map(|(x, y)| {
+            let at = x.1.iter().zip(&y.1).position(|(p, q)| p != q);
+            format!("{} (first differing byte {at:?})", x.0)
+        })
+        .collect();
+    assert!(
+        differing.is_empty(),
+        "the two runs wrote different files: {differing:?}"
+    );
+}
