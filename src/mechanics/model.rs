@@ -44,6 +44,8 @@ pub enum MechError {
     },
     #[error("the mesh has rock elements but the mechanical settings have no rock (the scene's [rock] table)")]
     NoRock,
+    #[error("mechanical settings: {0}")]
+    Settings(#[from] crate::vocab::Invalid),
     #[error("joint contact on day {day:.3}: {source}")]
     Contact {
         day: f64,

@@ -4,6 +4,7 @@
 
 use crate::material::{AutogenousLaw, CreepLaw, ModulusLaw};
 use crate::scene::{ContactSolverKind, Effect, Scene};
+use crate::vocab::Invalid;
 
 /// Poisson's ratio of a rock whose scene gives none (`rock.poisson` absent).
 pub const DEFAULT_ROCK_POISSON: f64 = 0.25;
@@ -99,28 +100,32 @@ impl MechanicsSettings {
     /// [`NO_THERMAL_EXPANSION`]; creep and autogenous laws count only with
     /// their effects.
     ///
-    /// # Panics
-    /// If `concrete.modulus`, `concrete.poisson` or (with a `[rock]` table)
-    /// `rock.modulus_pa` is missing: the scene's validation refuses a
-    /// mechanical effect without them.
-    pub fn from_scene(scene: &Scene) -> MechanicsSettings {
+    /// `Err` names `concrete.modulus`, `concrete.poisson` or (with a `[rock]`
+    /// table) `rock.modulus_pa` when missing: the scene's validation refuses
+    /// a mechanical effect without them, so only a scene built in code gets
+    /// here without them.
+    pub fn from_scene(scene: &Scene) -> Result<MechanicsSettings, Invalid> {
         let c = &scene.concrete;
         let j = &scene.joints;
-        MechanicsSettings {
+        let rock = match &scene.rock {
+            Some(r) => Some(RockMechanics {
+                modulus_pa: required(r.modulus_pa, "rock.modulus_pa")?,
+                poisson: r.poisson.unwrap_or(DEFAULT_ROCK_POISSON),
+                expansion_per_c: r.expansion_per_c.unwrap_or(NO_THERMAL_EXPANSION),
+                density_kg_m3: r.density_kg_m3,
+            }),
+            None => None,
+        };
+        Ok(MechanicsSettings {
             concrete: ConcreteMechanics {
-                modulus: required(c.modulus, "concrete.modulus"),
-                poisson: required(c.poisson, "concrete.poisson"),
+                modulus: required(c.modulus, "concrete.modulus")?,
+                poisson: required(c.poisson, "concrete.poisson")?,
                 expansion_per_c: c.expansion_per_c.unwrap_or(NO_THERMAL_EXPANSION),
                 density_kg_m3: c.density_kg_m3,
                 creep: c.creep.clone().filter(|_| scene.has(Effect::Creep)),
                 autogenous: c.autogenous.filter(|_| scene.has(Effect::Autogenous)),
             },
-            rock: scene.rock.as_ref().map(|r| RockMechanics {
-                modulus_pa: required(r.modulus_pa, "rock.modulus_pa"),
-                poisson: r.poisson.unwrap_or(DEFAULT_ROCK_POISSON),
-                expansion_per_c: r.expansion_per_c.unwrap_or(NO_THERMAL_EXPANSION),
-                density_kg_m3: r.density_kg_m3,
-            }),
+            rock,
             thermal_strain: scene.has(Effect::ThermalStrain),
             self_weight: scene.has(Effect::SelfWeight),
             reservoir_load: scene.has(Effect::ReservoirLoad),
@@ -136,13 +141,16 @@ impl MechanicsSettings {
                 grout_min_thickness_m: j.grout_min_thickness_m,
                 bond_strength_pa: j.bond_strength_pa,
             },
-        }
+        })
     }
 }
 
 /// A value the scene's validation guarantees for a mechanical scene.
-fn required<T>(value: Option<T>, key: &str) -> T {
-    value.unwrap_or_else(|| {
-        panic!("{key} is missing: MechanicsSettings::from_scene needs a validated scene with a mechanical effect")
+fn required<T>(value: Option<T>, key: &str) -> Result<T, Invalid> {
+    value.ok_or_else(|| {
+        Invalid::new(
+            key,
+            format!("{key} is missing: the mechanical effects need it"),
+        )
     })
 }

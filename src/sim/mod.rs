@@ -177,7 +177,7 @@ impl<'a> Simulation<'a> {
         let mechanics = if scene.any_mechanical() {
             Some(MechanicsModel::new(
                 mesh,
-                &crate::mechanics::MechanicsSettings::from_scene(scene),
+                &crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?,
                 &Supports::far_boundary(mesh),
             )?)
         } else {

@@ -348,7 +348,7 @@ pub fn full_dam_mechanics_step_cost(
 ) -> Result<FullDamMechCost, MechError> {
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
-        &crate::mechanics::MechanicsSettings::from_scene(scene),
+        &crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?,
         &crate::mechanics::Supports::far_boundary(mesh),
     )?;
     for (block, lift) in all_lifts(mesh) {

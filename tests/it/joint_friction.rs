@@ -192,7 +192,7 @@ fn slide(solver: ContactSolverKind, mu_s: f64, mu_k: f64, ratios: &[f64]) -> Vec
     for &n in block_nodes(&mesh, 1).iter().chain(&far) {
         fixed.extend((0..3).map(|c| (n, c)));
     }
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
     assert_eq!(m.points.len(), 9, "3 × 3 joint points");
     for p in &m.points {
@@ -435,7 +435,7 @@ fn incline(solver: ContactSolverKind, hold: HoldY, push: &[f64]) -> (Vec<Incline
     if hold == HoldY::Joint {
         fixed.extend(b_nodes.iter().map(|&n| (n, 1)));
     }
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
     assert_eq!(m.points.len(), 12, "3 × 4 joint points");
     for p in &m.points {

@@ -50,7 +50,7 @@ fn two_blocks(mu: f64, gap0: f64, contact: ContactSolverKind) -> (Scene, Mesh) {
 /// Pours both blocks on day 0 at 20 °C and grouts the (closed) joint on day 1.
 fn grouted(contact: ContactSolverKind) -> (MechanicsModel, Mesh) {
     let (sc, mesh) = two_blocks(0.0, 0.0, contact);
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);
@@ -172,7 +172,7 @@ fn seasons(scale_len: f64, scale_stress: f64) -> (Vec<f64>, usize, Vec<usize>) {
     let law = sc.concrete.modulus.as_mut().unwrap();
     law.e0_pa *= scale_stress;
     sc.joints.initial_gap_m *= scale_len;
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);

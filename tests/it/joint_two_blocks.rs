@@ -25,7 +25,7 @@ fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
     let j: toml::Table = toml::from_str(&joints).unwrap();
     sc.joints = j["joints"].clone().try_into().unwrap();
     let mesh = blocks_mesh(&sc);
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();
     m.pour(1, 1, 0.0);
     m.pour(2, 1, 0.0);

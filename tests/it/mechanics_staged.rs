@@ -57,7 +57,7 @@ fn newborn_lifts_placed_warm_are_stress_free_while_nothing_moves() {
     let thermal = ThermalSettings::from_scene(&sc);
     let mut th = ThermalModel::new(&mesh, &thermal, vec![], Some(air), None).unwrap();
     // Fully restrained: any spurious thermal strain would show as stress.
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, true)).unwrap();
     let mut t = 0.0;
     for lift in 1..=3 {
@@ -94,7 +94,7 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
         "",
     );
     let mesh = blocks_mesh(&sc);
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, false)).unwrap();
     let mut t = 0.0;
     for lift in 1..=5 {
@@ -144,7 +144,7 @@ fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64
     let mesh = blocks_mesh(&sc);
     let thermal = ThermalSettings::from_scene(&sc);
     let mut th = ThermalModel::new(&mesh, &thermal, vec![], None, None).unwrap();
-    let mechanics = MechanicsSettings::from_scene(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &rollers(&mesh, true, true, true)).unwrap();
     th.pour(1, 1, 0.0, 15.0);
     m.pour(1, 1, 0.0);
@@ -229,5 +229,24 @@ fn with_the_usual_modulus_exponent_the_rate_is_one_plus_b() {
     assert!(
         (slope - (1.0 + b)).abs() < 0.1,
         "rate {slope:.3}, errors {errs:?}"
+    );
+}
+
+/// A scene built in code without a value the mechanics needs is an error
+/// that names the key, never a panic (validation refuses it from a file).
+#[test]
+fn mechanics_settings_name_a_missing_value() {
+    let mut sc = mech_scene(
+        "\"self_weight\"",
+        &blocks_geometry(1, 6.0, 4.0, 3, 2, 2),
+        "",
+    );
+    assert!(MechanicsSettings::from_scene(&sc).is_ok());
+    sc.concrete.poisson = None;
+    let e = MechanicsSettings::from_scene(&sc).unwrap_err();
+    assert_eq!(e.key, "concrete.poisson");
+    assert_eq!(
+        e.to_string(),
+        "concrete.poisson is missing: the mechanical effects need it"
     );
 }
