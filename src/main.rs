@@ -136,6 +136,10 @@ enum StudyCommand {
         /// mechanical dofs (minutes and several GB on the large arch).
         #[arg(long)]
         complete_mechanics: bool,
+        /// Skip the exact-path run of scenes with joints (every contact-set
+        /// change refactorised) and its comparison with the fast path.
+        #[arg(long)]
+        no_exact: bool,
     },
 }
 
@@ -229,8 +233,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     days,
                     solver,
                     complete_mechanics,
+                    no_exact,
                 },
-        } => study_perf(scenes, quick, days, solver.as_deref(), complete_mechanics),
+        } => {
+            let options = groutready::study::PerfOptions {
+                max_days: days,
+                solvers: groutready::study::parse_solvers(solver.as_deref())?,
+                complete_mechanics,
+                exact: !no_exact,
+            };
+            study_perf(scenes, quick, options)
+        }
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out, force },
         } => schedule_synth(&scene, &out, force),
@@ -342,9 +355,7 @@ fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
 fn study_perf(
     scenes: Vec<PathBuf>,
     quick: bool,
-    days: Option<f64>,
-    solver: Option<&str>,
-    complete_mechanics: bool,
+    options: groutready::study::PerfOptions,
 ) -> anyhow::Result<u8> {
     let defaults = scenes.is_empty();
     let scenes = if defaults {
@@ -352,19 +363,18 @@ fn study_perf(
     } else {
         scenes
     };
-    let solvers = groutready::study::parse_solvers(solver)?;
-    groutready::study::perf(&scenes, days, &solvers, complete_mechanics)?;
+    groutready::study::perf(&scenes, &options)?;
     if defaults && !quick {
         // The large arch's whole construction with mechanics takes
         // hours: its first 40 days (17 mechanical steps on a 171k-dof
-        // system, about 2.5 min) and its complete-dam steps.
+        // system) and its complete-dam steps; no exact-path rerun.
         let large = [bundled("models/xiaowan_like.toml")];
-        groutready::study::perf(
-            &large,
-            Some(days.unwrap_or(40.0)),
-            &solvers,
-            complete_mechanics,
-        )?;
+        let options = groutready::study::PerfOptions {
+            max_days: Some(options.max_days.unwrap_or(40.0)),
+            exact: false,
+            ..options
+        };
+        groutready::study::perf(&large, &options)?;
     }
     Ok(0)
 }

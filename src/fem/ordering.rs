@@ -14,9 +14,69 @@ pub enum Ordering {
     /// faer's approximate minimum degree.
     #[default]
     Amd,
+    /// METIS's multilevel nested dissection (`METIS_NodeND`) of the
+    /// matrix graph, computed when the solver analyses its pattern.
+    Metis,
     /// Elimination order: `perm[k]` is the dof eliminated k-th (a permutation
     /// of 0..n), e.g. from [`nested_dissection`].
     Custom(Vec<u32>),
+}
+
+/// Why METIS refused a graph.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("METIS_NodeND returned status {status} on a graph of {n} vertices")]
+pub struct MetisError {
+    pub status: i32,
+    pub n: usize,
+}
+
+/// METIS's nested-dissection elimination order of the graph of `pattern`
+/// (see [`Ordering::Custom`]). Deterministic: METIS seeds its generator
+/// with a fixed value at each call, and the calls are serialised because
+/// that generator is process-global (two plans in two threads otherwise
+/// got different orderings, and results that differed in the last bits).
+pub fn metis_nested_dissection(pattern: &Pattern) -> Result<Vec<u32>, MetisError> {
+    use metis_sys::{idx_t, METIS_NodeND, METIS_SetDefaultOptions, METIS_NOPTIONS};
+    let n = pattern.n_dofs();
+    if n <= 1 {
+        return Ok((0..n as u32).collect());
+    }
+    let graph = Graph::of(pattern);
+    let err = |status: i32| MetisError { status, n };
+    let to_idx = |v: usize| idx_t::try_from(v).map_err(|_| err(-1));
+    let mut xadj = graph
+        .ptr
+        .iter()
+        .map(|&p| to_idx(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut adjncy: Vec<idx_t> = graph.adj.iter().map(|&v| v as idx_t).collect();
+    let mut nvtxs = to_idx(n)?;
+    let mut options = [0 as idx_t; METIS_NOPTIONS as usize];
+    let mut perm = vec![0 as idx_t; n];
+    let mut iperm = vec![0 as idx_t; n];
+    static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+    // SAFETY: the arrays have the lengths METIS reads (xadj n+1, adjncy
+    // xadj[n], options METIS_NOPTIONS, perm and iperm n) and outlive the
+    // calls; a null vwgt means unit weights.
+    let status = unsafe {
+        METIS_SetDefaultOptions(options.as_mut_ptr());
+        METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    };
+    if status != metis_sys::rstatus_et_METIS_OK {
+        return Err(err(status));
+    }
+    // METIS: row k of the permuted matrix is row perm[k] of the original,
+    // i.e. perm[k] is the dof eliminated k-th.
+    Ok(perm.into_iter().map(|v| v as u32).collect())
 }
 
 /// Geometric nested dissection of the graph of `pattern`, using one point

@@ -23,7 +23,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
-use super::ordering::Ordering;
+use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
 
 /// Why a factorisation or solve failed.
@@ -46,6 +46,10 @@ pub enum SolveError {
     DimensionMismatch { expected: usize, got: usize },
     #[error("the custom ordering is not a permutation of 0..{n}")]
     InvalidOrdering { n: usize },
+    /// The capacitance system of a changed Dirichlet set is singular: the
+    /// new set leaves a part of the structure without support.
+    #[error("the capacitance system of {size} changed rows is singular")]
+    SingularCapacitance { size: usize },
     #[error("faer: {0}")]
     Faer(String),
 }
@@ -108,7 +112,6 @@ impl CholeskySolver {
         par: Par,
     ) -> Result<Self, SolveError> {
         let t = Instant::now();
-        let n = pattern.n_dofs();
         let symbolic = match ordering {
             Ordering::Amd => factorize_symbolic_cholesky(
                 pattern.symbolic(),
@@ -116,26 +119,12 @@ impl CholeskySolver {
                 SymmetricOrdering::Amd,
                 Default::default(),
             ),
-            Ordering::Custom(fwd) => {
-                let mut inv = vec![u32::MAX; n];
-                let valid = fwd.len() == n
-                    && fwd.iter().enumerate().all(|(k, &d)| {
-                        let ok = (d as usize) < n && inv[d as usize] == u32::MAX;
-                        if ok {
-                            inv[d as usize] = k as u32;
-                        }
-                        ok
-                    });
-                if !valid {
-                    return Err(SolveError::InvalidOrdering { n });
-                }
-                factorize_symbolic_cholesky(
-                    pattern.symbolic(),
-                    Side::Upper,
-                    SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inv, n)),
-                    Default::default(),
-                )
+            Ordering::Metis => {
+                let fwd = metis_nested_dissection(&pattern)
+                    .map_err(|e| SolveError::Faer(e.to_string()))?;
+                symbolic_custom(&pattern, &fwd)?
             }
+            Ordering::Custom(fwd) => symbolic_custom(&pattern, fwd)?,
         }
         .map_err(|e| SolveError::Faer(format!("symbolic Cholesky: {e:?}")))?;
         let scratch = MemBuffer::try_new(
@@ -191,6 +180,43 @@ impl CholeskySolver {
     /// Entries of the factor L (fill included).
     pub fn factor_nnz(&self) -> usize {
         self.symbolic.len_val()
+    }
+
+    /// Floating-point operations of one numeric factorisation, Σ c_k² over
+    /// the columns of L (c_k: entries of column k): a deterministic measure
+    /// of its cost, to weigh against solves ([`CholeskySolver::factor_nnz`]
+    /// entries are read twice per right-hand side).
+    pub fn factor_flops(&self) -> f64 {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => s
+                .col_ptr()
+                .windows(2)
+                .map(|w| {
+                    let c = (w[1] - w[0]) as f64;
+                    c * c
+                })
+                .sum(),
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let (begin, end, rows) = (
+                    s.supernode_begin(),
+                    s.supernode_end(),
+                    s.col_ptr_for_row_idx(),
+                );
+                (0..s.n_supernodes())
+                    .map(|k| {
+                        let w = (end[k] - begin[k]) as f64;
+                        let below = (rows[k + 1] - rows[k]) as f64;
+                        // Σ_{i<w} (w − i + below)²
+                        (0..w as usize)
+                            .map(|i| {
+                                let c = w - i as f64 + below;
+                                c * c
+                            })
+                            .sum::<f64>()
+                    })
+                    .sum()
+            }
+        }
     }
 
     /// True when faer chose its supernodal (dense-block) factorisation.
@@ -346,6 +372,33 @@ impl CholeskySolver {
     pub fn solve_columns(&self, rhs: &mut Mat<f64>) -> Result<(), SolveError> {
         self.solve_mat(rhs.as_mut())
     }
+}
+
+/// faer's symbolic Cholesky of `pattern` in the elimination order `fwd`
+/// (`fwd[k]` is the dof eliminated k-th).
+fn symbolic_custom(
+    pattern: &Pattern,
+    fwd: &[u32],
+) -> Result<Result<SymbolicCholesky<u32>, faer::sparse::FaerError>, SolveError> {
+    let n = pattern.n_dofs();
+    let mut inv = vec![u32::MAX; n];
+    let valid = fwd.len() == n
+        && fwd.iter().enumerate().all(|(k, &d)| {
+            let ok = (d as usize) < n && inv[d as usize] == u32::MAX;
+            if ok {
+                inv[d as usize] = k as u32;
+            }
+            ok
+        });
+    if !valid {
+        return Err(SolveError::InvalidOrdering { n });
+    }
+    Ok(factorize_symbolic_cholesky(
+        pattern.symbolic(),
+        Side::Upper,
+        SymmetricOrdering::Custom(PermRef::new_checked(fwd, &inv, n)),
+        Default::default(),
+    ))
 }
 
 /// ‖b − A x‖₂ / ‖b‖₂ (or ‖A x‖₂ when b = 0).

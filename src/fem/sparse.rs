@@ -61,6 +61,45 @@ pub struct Pattern {
     elem_dofs: Vec<u32>,
     scatter_ptr: Vec<usize>,
     scatter: Vec<u32>,
+    /// the strict upper triangle by rows, built on first use by
+    /// [`SparseSym::column`]
+    rows: std::sync::OnceLock<RowIndex>,
+}
+
+/// The strict upper triangle by rows: row i holds `col[ptr[i]..ptr[i + 1]]`
+/// (columns j > i) whose values sit at `pos[..]` of the value array.
+#[derive(Debug, Clone)]
+struct RowIndex {
+    ptr: Vec<usize>,
+    col: Vec<u32>,
+    pos: Vec<u32>,
+}
+
+impl RowIndex {
+    fn of(n: usize, col_ptr: &[u32], row_idx: &[u32]) -> RowIndex {
+        let mut ptr = vec![0usize; n + 1];
+        for j in 0..n {
+            for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize - 1] {
+                ptr[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut fill = ptr.clone();
+        let mut col = vec![0u32; ptr[n]];
+        let mut pos = vec![0u32; ptr[n]];
+        for j in 0..n {
+            let (s, e) = (col_ptr[j] as usize, col_ptr[j + 1] as usize - 1);
+            for (k, &i) in row_idx.iter().enumerate().take(e).skip(s) {
+                let i = i as usize;
+                col[fill[i]] = j as u32;
+                pos[fill[i]] = k as u32;
+                fill[i] += 1;
+            }
+        }
+        RowIndex { ptr, col, pos }
+    }
 }
 
 /// The element dof lists, flattened: slot `e` owns `dofs[ptr[e]..ptr[e + 1]]`
@@ -252,6 +291,7 @@ impl Pattern {
             elem_dofs: el.dofs,
             scatter_ptr: el.scatter_ptr,
             scatter: cols.scatter,
+            rows: std::sync::OnceLock::new(),
         };
         // verify faer's invariants once (sorted, in range, monotone col_ptr)
         let _ = SymbolicSparseColMatRef::new_checked(
@@ -481,6 +521,21 @@ impl SparseSym {
         self.pattern.find(i, j).map_or(0.0, |k| self.values[k])
     }
 
+    /// Calls `f(i, A_ij)` for every stored entry of column `j` (both
+    /// triangles), in increasing i.
+    pub fn column(&self, j: usize, mut f: impl FnMut(usize, f64)) {
+        let p = &*self.pattern;
+        let rows = p
+            .rows
+            .get_or_init(|| RowIndex::of(p.n, &p.col_ptr, &p.row_idx));
+        for k in p.col_ptr[j] as usize..p.col_ptr[j + 1] as usize {
+            f(p.row_idx[k] as usize, self.values[k]);
+        }
+        for k in rows.ptr[j]..rows.ptr[j + 1] {
+            f(rows.col[k] as usize, self.values[rows.pos[k] as usize]);
+        }
+    }
+
     /// Diagonal.
     pub fn diag(&self) -> Vec<f64> {
         self.pattern
@@ -520,6 +575,19 @@ impl SparseSym {
     pub fn dirichlet_correction(&self, fixed: &[bool], u: &[f64], rhs: &mut [f64]) {
         let p = &*self.pattern;
         assert!(fixed.len() == p.n && u.len() == p.n && rhs.len() == p.n);
+        // Most prescribed values are zero (supports, sticking joint
+        // points): walk only the columns that load something.
+        let loaded: Vec<usize> = (0..p.n).filter(|&j| fixed[j] && u[j] != 0.0).collect();
+        if loaded.len() < p.n / 64 {
+            for j in loaded {
+                self.column(j, |i, v| {
+                    if !fixed[i] {
+                        rhs[i] -= v * u[j];
+                    }
+                });
+            }
+            return;
+        }
         for j in 0..p.n {
             let s = p.col_ptr[j] as usize;
             let e = p.col_ptr[j + 1] as usize;

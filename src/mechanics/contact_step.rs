@@ -25,8 +25,15 @@
 //!   a new pair starts closed), closed points become exact Dirichlet rows of
 //!   their own unknowns, the system is solved, and the states are corrected
 //!   from the gaps and reactions until nothing changes. The symbolic
-//!   factorisation is shared by every state; a numeric one is needed only
-//!   when the set of constrained rows changes. Friction is a return mapping:
+//!   factorisation is shared by every state; the step's numeric factor
+//!   serves every pass: a pass whose constrained rows differ from the
+//!   factor's is solved exactly by the capacitance correction of
+//!   [`crate::fem::capacitance`] (m solves for the m changed rows, kept for
+//!   later passes, and a dense m × m system), and the step refactorises
+//!   only when the new rows would cost more solves than a factorisation
+//!   (counted by flops, so the choice is deterministic) or the grout
+//!   springs change. `solver.contact_capacitance = false` refactorises at
+//!   every change instead (the exact path it is compared with). Friction is a return mapping:
 //!   a point that slipped in the last step starts as a stick trial, slips if
 //!   its trial force exceeds μ_k·r_n (μ_s for a point at rest), in the trial
 //!   force's direction for the whole step; the slip forces μ_k·r_n(x) are a
@@ -45,7 +52,8 @@
 
 use std::time::Instant;
 
-use crate::fem::{relative_residual, SolveError, SparseSym};
+use crate::fem::capacitance::constrained_residual;
+use crate::fem::{relative_residual, Capacitance, SolveError, SparseSym};
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
 
@@ -63,6 +71,15 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 const MAX_FLIPS: usize = 3;
 /// Slip-force iterates Anderson mixing remembers.
 const ANDERSON_DEPTH: usize = 8;
+/// Cost of one right-hand side of a sparse triangular solve per factor
+/// entry read, relative to one flop of the numeric factorisation (which
+/// runs in dense blocks at a higher rate): the capacitance correction is
+/// chosen while its new columns cost less than a factorisation. Measured
+/// on the demo's live systems (`groutready study perf`).
+const CAPACITANCE_SOLVE_WEIGHT: f64 = 2.0;
+/// Memory the capacitance columns of one step may hold [bytes]; above it
+/// the step refactorises.
+const CAPACITANCE_MAX_BYTES: usize = 1 << 30;
 
 /// Settings of the joint solve (from the scene's `[joints]` and `[solver]`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,6 +96,10 @@ pub struct JointSolveSettings {
     pub force_tolerance: f64,
     /// tensile strength of a grout layer [Pa]
     pub bond_strength: f64,
+    /// active set: a pass whose constrained rows differ from the factor's
+    /// is solved by the capacitance correction (exact) instead of a new
+    /// factorisation, while that is cheaper
+    pub capacitance: bool,
 }
 
 /// Why a joint solve failed.
@@ -106,6 +127,58 @@ pub struct JointStepOutcome {
     pub seconds_numeric: f64,
     /// largest tension [Pa] left on a point kept closed by the flip limit
     pub kept_closed_tension: f64,
+    /// why each factorisation was made
+    pub refactor_reasons: RefactorCounts,
+    /// passes solved by the capacitance correction
+    pub capacitance_solves: usize,
+    /// right-hand sides of the base factor those corrections needed
+    pub capacitance_columns: usize,
+    /// largest capacitance system (changed rows)
+    pub capacitance_max_rank: usize,
+    /// refinements of corrected solutions on their residual
+    pub capacitance_refinements: usize,
+    /// wall time of the corrections [s]
+    pub seconds_capacitance: f64,
+}
+
+/// Why the joint solve factorised.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RefactorReason {
+    /// the step's first pass (the stiffness has aged, elements were born)
+    Step,
+    /// grout springs appeared or cracked
+    Grout,
+    /// the constrained rows changed and the correction is off
+    Contact,
+    /// the constrained rows changed more than the correction's break-even
+    Rank,
+}
+
+/// Factorisations counted by [`RefactorReason`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct RefactorCounts {
+    pub step: usize,
+    pub grout: usize,
+    pub contact: usize,
+    pub rank: usize,
+}
+
+impl RefactorCounts {
+    pub fn count(&mut self, reason: RefactorReason) {
+        match reason {
+            RefactorReason::Step => self.step += 1,
+            RefactorReason::Grout => self.grout += 1,
+            RefactorReason::Contact => self.contact += 1,
+            RefactorReason::Rank => self.rank += 1,
+        }
+    }
+
+    pub fn add(&mut self, other: &RefactorCounts) {
+        self.step += other.step;
+        self.grout += other.grout;
+        self.contact += other.contact;
+        self.rank += other.rank;
+    }
 }
 
 /// The step's system before contact: K̃ (no springs, no constraints) and f̃.
@@ -292,12 +365,15 @@ struct ActiveSet {
     tol_g: f64,
     frictionless: bool,
     anderson: Anderson,
-    /// the constrained rows and grout springs of the factor in `live`
-    factored_key: Option<(Vec<bool>, Vec<bool>)>,
+    /// the grout springs of the factor in `live` and the correction of
+    /// its constrained rows to the current guess's
+    factored: Option<(Vec<bool>, Capacitance)>,
     /// K̃ with the springs of the factored states, before its Dirichlet rows
     a_cur: SparseSym,
     /// the factored matrix
     m: SparseSym,
+    /// correct a changed set of constrained rows instead of refactorising
+    capacitance: bool,
 }
 
 /// What correcting the states after a pass found.
@@ -357,9 +433,10 @@ impl ActiveSet {
             tol_g: s.gap_tolerance,
             frictionless: s.mu_static == 0.0,
             anderson: Anderson::new(ANDERSON_DEPTH),
-            factored_key: None,
+            factored: None,
             a_cur: SparseSym::new(sys.a.pattern().clone()),
             m: SparseSym::new(sys.a.pattern().clone()),
+            capacitance: s.capacitance,
         }
     }
 
@@ -401,21 +478,77 @@ impl ActiveSet {
                 PointState::Grouted => springs[q] = true,
             }
         }
-        let key = (fixed.clone(), springs.clone());
-        if self.factored_key.as_ref() != Some(&key) {
+        if let Some(reason) = self.refactor_reason(live, &fixed, &springs) {
             self.a_cur = with_springs(sys.a, live, work);
             self.m = self.a_cur.clone();
             self.m.apply_dirichlet(&fixed);
             factorize(live, &self.m, &mut trial.out)?;
-            self.factored_key = Some(key);
+            trial.out.refactor_reasons.count(reason);
+            self.factored = Some((springs, Capacitance::new(fixed.clone())));
         }
-        self.a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
-        for i in 0..live.n {
-            if fixed[i] {
-                rhs[i] = presc[i];
+        let Some((_, cap)) = self.factored.as_mut() else {
+            unreachable!("factorised above")
+        };
+        if cap.base() == fixed.as_slice() {
+            self.a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
+            for i in 0..live.n {
+                if fixed[i] {
+                    rhs[i] = presc[i];
+                }
             }
+            return solve_checked(live, &self.m, &rhs, &mut trial.out);
         }
-        solve_checked(live, &self.m, &rhs, &mut trial.out)
+        let before = cap.stats;
+        let t = Instant::now();
+        let x = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
+        let out = &mut trial.out;
+        out.seconds_capacitance += t.elapsed().as_secs_f64();
+        out.capacitance_solves += 1;
+        out.capacitance_columns += (cap.stats.columns - before.columns) as usize;
+        out.capacitance_refinements += (cap.stats.refinements - before.refinements) as usize;
+        out.capacitance_max_rank = out.capacitance_max_rank.max(cap.stats.max_rank);
+        out.solves += 1;
+        // the residual on the system of this pass's rows, as a fresh factor's
+        let res = constrained_residual(&self.a_cur, &fixed, &presc, &rhs, &x);
+        if res.is_nan() || res > RESIDUAL_TOLERANCE {
+            return Err(JointStepError::Residual(res));
+        }
+        Ok(x)
+    }
+
+    /// Why the factor in `live` cannot serve the guess with rows `fixed`
+    /// constrained and grout `springs`, or `None` when it can (directly or
+    /// through the capacitance correction).
+    fn refactor_reason(
+        &self,
+        live: &LiveSystem,
+        fixed: &[bool],
+        springs: &[bool],
+    ) -> Option<RefactorReason> {
+        let Some((factored_springs, cap)) = &self.factored else {
+            return Some(RefactorReason::Step);
+        };
+        if factored_springs.as_slice() != springs {
+            return Some(RefactorReason::Grout);
+        }
+        if cap.base() == fixed {
+            return None;
+        }
+        if !self.capacitance {
+            return Some(RefactorReason::Contact);
+        }
+        let changes = cap.changes(fixed);
+        let new_columns = cap.uncached(&changes);
+        let rank = changes.len() as f64;
+        let nnz = live.solver.factor_nnz() as f64;
+        let cost =
+            new_columns as f64 * 4.0 * nnz * CAPACITANCE_SOLVE_WEIGHT + rank * rank * rank / 3.0;
+        let memory = cap.memory_bytes() + 8 * live.n * new_columns;
+        if cost > live.solver.factor_flops() || memory > CAPACITANCE_MAX_BYTES {
+            Some(RefactorReason::Rank)
+        } else {
+            None
+        }
     }
 
     /// Corrects the guessed states from the gaps and reactions of the pass's
@@ -631,12 +764,17 @@ fn condensed_qp(
             mu_k: s.mu_kinetic,
         }
     };
-    for _round in 0..s.max_iterations {
+    for round in 0..s.max_iterations {
         let mut m = with_springs(sys.a, live, &trial.work);
         let mut rhs = sys.b.to_vec();
         m.dirichlet_correction(&live.supported, sys.prescribed, &mut rhs);
         m.apply_dirichlet(&live.supported);
         factorize(live, &m, &mut trial.out)?;
+        trial.out.refactor_reasons.count(if round == 0 {
+            RefactorReason::Step
+        } else {
+            RefactorReason::Grout
+        });
         let contact: Vec<usize> = (0..live.pairs.len())
             .filter(|&q| trial.work[live.pairs[q].point as usize].state != PointState::Grouted)
             .collect();

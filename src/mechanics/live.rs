@@ -22,6 +22,7 @@ use nalgebra::DMatrix;
 
 use crate::fem::elasticity::Mat24;
 use crate::fem::{CholeskySolver, Ordering, Pattern, SolveError};
+use crate::scene::OrderingKind;
 
 use super::joints::JointPoint;
 
@@ -77,26 +78,44 @@ pub enum LiveError {
     ChainedPair { node: u32 },
 }
 
+/// The elements a live system is numbered from: connectivity, which are
+/// live, and the unit-modulus stiffness of each.
+#[derive(Clone, Copy)]
+pub struct ElementSet<'a> {
+    pub conn: &'a [[u32; 8]],
+    pub live: &'a [bool],
+    pub k_unit: &'a [Mat24],
+}
+
 impl LiveSystem {
     /// The system of no live element: what a model holds until its first
     /// rebuild.
     pub fn empty(points: &[JointPoint], n_nodes: usize) -> Result<LiveSystem, LiveError> {
         let no_pair = vec![false; points.len()];
-        LiveSystem::build(&[], &[], &[], points, &no_pair, &[], n_nodes)
+        let none = ElementSet {
+            conn: &[],
+            live: &[],
+            k_unit: &[],
+        };
+        LiveSystem::build(none, points, &no_pair, &[], n_nodes, OrderingKind::Amd)
     }
 
     /// Numbers the unknowns of the live elements and pairs and analyses the
-    /// pattern. `pair_live[p]` says whether point p is live (both nodes born);
-    /// `supported[g]` marks fixed global dofs.
+    /// pattern in `ordering`. `pair_live[p]` says whether point p is live
+    /// (both nodes born); `supported[g]` marks fixed global dofs.
     pub fn build(
-        elements: &[[u32; 8]],
-        live: &[bool],
-        k_unit: &[Mat24],
+        elements: ElementSet,
         points: &[JointPoint],
         pair_live: &[bool],
         supported: &[bool],
         n_nodes: usize,
+        ordering: OrderingKind,
     ) -> Result<LiveSystem, LiveError> {
+        let ElementSet {
+            conn: elements,
+            live,
+            k_unit,
+        } = elements;
         let LivePairs {
             mut pairs,
             pair_of_b,
@@ -134,15 +153,16 @@ impl LiveSystem {
         let n = n as usize;
         let lists: Vec<&[u32]> = live_elements.iter().map(|e| e.dofs.as_slice()).collect();
         let pattern = Arc::new(Pattern::new(n, &lists));
-        // AMD: on the complete demo arch (25,458 dofs) it fills 3.5M entries of
-        // L against 22.8M for the geometric nested dissection, and factors in
-        // 55 ms against 0.55 s (examples/factor_orderings.rs).
         let par = if n < 30_000 {
             faer::Par::Seq
         } else {
             faer::Par::rayon(0)
         };
-        let solver = CholeskySolver::with_options(pattern.clone(), &Ordering::Amd, par)?;
+        let ordering = match ordering {
+            OrderingKind::Amd => Ordering::Amd,
+            OrderingKind::Metis => Ordering::Metis,
+        };
+        let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
         let supported_r = reduced_supports(n, &node_dofs, &pairs, points, supported)?;
         Ok(LiveSystem {
             n,

@@ -13,9 +13,9 @@ use crate::material::{AgeStepError, CreepLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::vocab::JointState;
 
-use super::contact_step::{self, JointSolveSettings, JointStepError, StepSystem};
+use super::contact_step::{self, JointSolveSettings, JointStepError, RefactorCounts, StepSystem};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::live::{LiveError, LiveSystem, NONE};
+use super::live::{ElementSet, LiveError, LiveSystem, NONE};
 use super::settings::{JointMechanics, MechanicsSettings};
 
 /// Gravity [m/s²].
@@ -109,6 +109,25 @@ pub struct MechStats {
     pub contact_iterations: usize,
     /// largest tension [Pa] left on a joint point kept closed by the flip limit
     pub kept_closed_tension: f64,
+    /// why the joint solves factorised
+    #[serde(default)]
+    pub refactor_reasons: RefactorCounts,
+    /// contact passes solved by the capacitance correction instead of a
+    /// factorisation
+    #[serde(default)]
+    pub capacitance_solves: usize,
+    /// right-hand sides of the step's factor those corrections took
+    #[serde(default)]
+    pub capacitance_columns: usize,
+    /// largest capacitance system [changed rows]
+    #[serde(default)]
+    pub capacitance_max_rank: usize,
+    /// refinements of corrected solutions on their residual
+    #[serde(default)]
+    pub capacitance_refinements: usize,
+    /// wall time of the corrections [s] (part of `seconds_joints`)
+    #[serde(default)]
+    pub seconds_capacitance: f64,
 }
 
 /// Checkpointable mechanical state.
@@ -378,14 +397,18 @@ impl MechanicsModel {
                 };
             }
         }
+        let elements = ElementSet {
+            conn: &self.elements,
+            live: &self.state.live,
+            k_unit: &self.tables.k_unit,
+        };
         let sys = LiveSystem::build(
-            &self.elements,
-            &self.state.live,
-            &self.tables.k_unit,
+            elements,
             &self.points,
             &pair_live,
             &self.supported,
             n_nodes,
+            self.settings.ordering,
         )?;
         self.stats.symbolic += 1;
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
@@ -694,6 +717,15 @@ impl MechanicsModel {
         self.stats.contact_iterations += out.iterations;
         self.stats.kept_closed_tension =
             self.stats.kept_closed_tension.max(out.kept_closed_tension);
+        self.stats.refactor_reasons.add(&out.refactor_reasons);
+        self.stats.capacitance_solves += out.capacitance_solves;
+        self.stats.capacitance_columns += out.capacitance_columns;
+        self.stats.seconds_capacitance += out.seconds_capacitance;
+        self.stats.capacitance_refinements += out.capacitance_refinements;
+        self.stats.capacitance_max_rank = self
+            .stats
+            .capacitance_max_rank
+            .max(out.capacitance_max_rank);
         self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
         Ok(out.x)
     }
@@ -857,6 +889,12 @@ impl MechanicsModel {
     pub fn live_dofs(&self) -> usize {
         self.sys.n
     }
+
+    /// Entries of the live system's Cholesky factor and the flops of one
+    /// numeric factorisation (see [`CholeskySolver::factor_flops`](crate::fem::CholeskySolver::factor_flops)).
+    pub fn factor_size(&self) -> (usize, f64) {
+        (self.sys.solver.factor_nnz(), self.sys.solver.factor_flops())
+    }
 }
 
 /// The joint solver's settings for `mesh`. Gaps are compared to 1e-10 of
@@ -884,6 +922,7 @@ fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettin
         gap_tolerance: 1e-10 * size,
         force_tolerance: 1e-9,
         bond_strength: joint.bond_strength_pa,
+        capacitance: joint.capacitance,
     }
 }
 

@@ -3,7 +3,7 @@
 //! the joints' contact and grout parameters.
 
 use crate::material::{AutogenousLaw, CreepLaw, ModulusLaw};
-use crate::scene::{ContactSolverKind, Effect, Scene};
+use crate::scene::{ContactSolverKind, Effect, OrderingKind, Scene};
 use crate::vocab::Invalid;
 
 /// Poisson's ratio of a rock whose scene gives none (`rock.poisson` absent).
@@ -68,6 +68,8 @@ pub struct JointMechanics {
     pub grout_min_thickness_m: f64,
     /// Tensile bond strength of a grouted point [Pa]; above it the layer cracks.
     pub bond_strength_pa: f64,
+    /// Capacitance correction of contact-set changes (`solver.contact_capacitance`).
+    pub capacitance: bool,
 }
 
 /// Settings of the mechanical model ([`MechanicsModel::new`](super::MechanicsModel::new)).
@@ -87,6 +89,8 @@ pub struct MechanicsSettings {
     pub joints: bool,
     /// Contact and grout parameters (used with `joints`).
     pub joint: JointMechanics,
+    /// Fill-reducing ordering of the step's factorisation (`solver.ordering`).
+    pub ordering: OrderingKind,
 }
 
 impl MechanicsSettings {
@@ -95,7 +99,7 @@ impl MechanicsSettings {
     /// `density_kg_m3`, `creep`, `autogenous`), `[rock]` (`modulus_pa`,
     /// `poisson`, `expansion_per_c`, `density_kg_m3`), `[joints]` (friction,
     /// initial gap, grout) and `[solver]` (`contact`,
-    /// `contact_max_iterations`). `rock.poisson` defaults to
+    /// `contact_max_iterations`, `contact_capacitance`, `ordering`). `rock.poisson` defaults to
     /// [`DEFAULT_ROCK_POISSON`], an absent expansion to
     /// [`NO_THERMAL_EXPANSION`]; creep and autogenous laws count only with
     /// their effects.
@@ -133,6 +137,7 @@ impl MechanicsSettings {
             joint: JointMechanics {
                 solver: scene.solver.contact,
                 max_iterations: scene.solver.contact_max_iterations as usize,
+                capacitance: scene.solver.contact_capacitance,
                 mu_static: j.mu_static,
                 mu_kinetic: j.mu_kinetic,
                 initial_gap_m: j.initial_gap_m,
@@ -141,6 +146,7 @@ impl MechanicsSettings {
                 grout_min_thickness_m: j.grout_min_thickness_m,
                 bond_strength_pa: j.bond_strength_pa,
             },
+            ordering: scene.solver.ordering,
         })
     }
 }

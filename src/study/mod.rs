@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::app::{self, AppError, RunSummary};
-use crate::mechanics::MechError;
-use crate::scene::{Scene, ThermalSolverKind};
+use crate::mechanics::{MechError, MechStats};
+use crate::scene::{Effect, Scene, ThermalSolverKind};
 use crate::schedule::{self, SynthParams};
-use crate::sim::{SimError, Simulation};
+use crate::sim::{JointRecords, SimError, Simulation};
 use crate::thermal::ThermalError;
-use crate::vocab::Day;
+use crate::vocab::{Day, Epoch};
 
 /// One line per run for the CLI.
 pub fn summary_line(s: &RunSummary) -> String {
@@ -78,19 +78,35 @@ pub fn parse_solvers(value: Option<&str>) -> Result<Vec<ThermalSolverKind>, Stud
     }
 }
 
+/// What `perf` times besides each scene's staged history.
+#[derive(Debug, Clone, Default)]
+pub struct PerfOptions {
+    /// Stop each staged run after this many days.
+    pub max_days: Option<f64>,
+    /// Thermal solvers to time (empty = each scene's own).
+    pub solvers: Vec<ThermalSolverKind>,
+    /// Time the complete-dam mechanical step above
+    /// [`COMPLETE_MECHANICS_MAX_DOFS`] too.
+    pub complete_mechanics: bool,
+    /// For a scene with joints, run the exact path too (every contact-set
+    /// change refactorised) and compare the apertures at the grouting dates.
+    pub exact: bool,
+}
+
 /// Times the staged history of each scene (no files written), then the
 /// cost of one step of the complete dam (every lift live): its symbolic and
 /// numeric factorisation and the per-step solve, the figures that decide how
 /// a full-size run scales; with mechanics, also one mechanical step of the
 /// complete dam (up to [`COMPLETE_MECHANICS_MAX_DOFS`] unless
-/// `complete_mechanics`). `max_days` caps the staged run; `solvers` lists
-/// the thermal solvers to time (empty = each scene's own).
-pub fn perf(
-    scenes: &[PathBuf],
-    max_days: Option<f64>,
-    solvers: &[ThermalSolverKind],
-    complete_mechanics: bool,
-) -> Result<(), StudyError> {
+/// `complete_mechanics`). With `exact`, a scene with joints is run again
+/// on the exact path and the two compared where the planner reads them.
+pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError> {
+    let PerfOptions {
+        max_days,
+        ref solvers,
+        complete_mechanics,
+        exact,
+    } = *options;
     println!(
         "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "scene/solver",
@@ -129,14 +145,78 @@ pub fn perf(
                 scene: &scene,
                 mesh: &mesh,
             };
-            timed.staged_run(&schedules, max_days, load_s)?;
+            let fast = timed.staged_run(&schedules, max_days, load_s)?;
+            if exact && scene.has(Effect::Joints) && scene.solver.contact_capacitance {
+                let mut exact_scene = scene.clone();
+                exact_scene.solver.contact_capacitance = false;
+                let exact_run = Timed {
+                    label: format!("{stem}/exact"),
+                    scene: &exact_scene,
+                    ..timed.clone()
+                }
+                .staged_run(&schedules, max_days, load_s)?;
+                let c = compare_at_grouting_dates(&fast, &exact_run, &schedules, scene.epoch);
+                println!(
+                    "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ",
+                    "", c.samples, 1e3 * c.max_aperture_diff_m, c.states_differ
+                );
+            }
             timed.complete_dam(complete_mechanics)?;
         }
     }
     Ok(())
 }
 
+/// How two runs differ where the planner reads them: every zone point and
+/// zone minimum on its zone's planned grouting date.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GroutingDateDiff {
+    /// samples present in both runs
+    pub samples: usize,
+    /// largest aperture difference [m]
+    pub max_aperture_diff_m: f64,
+    /// samples whose contact states differ
+    pub states_differ: usize,
+}
+
+/// Compares the joint histories `a` and `b` of one scene at its zones'
+/// planned grouting dates (those inside both histories).
+pub fn compare_at_grouting_dates(
+    a: &JointRecords,
+    b: &JointRecords,
+    schedules: &schedule::Schedules,
+    epoch: Epoch,
+) -> GroutingDateDiff {
+    let mut diff = GroutingDateDiff::default();
+    let row = |r: &'_ JointRecords, day: Day| {
+        r.rows
+            .iter()
+            .find(|(d, _)| *d == day)
+            .map(|(_, s)| s.clone())
+    };
+    for g in &schedules.grouting {
+        let day = epoch.day(g.planned);
+        let (Some(ra), Some(rb)) = (row(a, day), row(b, day)) else {
+            continue;
+        };
+        for (c, col) in a.columns.iter().enumerate() {
+            if col.zone != g.zone_id() {
+                continue;
+            }
+            if let (Some(sa), Some(sb)) = (ra[c], rb[c]) {
+                diff.samples += 1;
+                diff.max_aperture_diff_m = diff
+                    .max_aperture_diff_m
+                    .max((sa.aperture - sb.aperture).abs());
+                diff.states_differ += usize::from(sa.state != sb.state);
+            }
+        }
+    }
+    diff
+}
+
 /// One scene with one thermal solver, as `perf` times it.
+#[derive(Clone)]
 struct Timed<'a> {
     path: &'a Path,
     /// `stem/solver`, the first column of the table
@@ -158,13 +238,14 @@ impl Timed<'_> {
     }
 
     /// The staged history up to `max_days`: the table's row, then the load
-    /// time and solver counters, then the mechanics' own figures.
+    /// time and solver counters, then the mechanics' own figures. Returns
+    /// the joint history.
     fn staged_run(
         &self,
         schedules: &schedule::Schedules,
         max_days: Option<f64>,
         load_s: f64,
-    ) -> Result<(), StudyError> {
+    ) -> Result<JointRecords, StudyError> {
         let (scene, mesh) = (self.scene, self.mesh);
         let mut sim = Simulation::new(scene, mesh, schedules).map_err(self.run_err(""))?;
         if let Some(days) = max_days {
@@ -189,28 +270,13 @@ impl Timed<'_> {
             t.seconds_assembly,
         );
         println!(
-            "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations",
-            "", load_s, sim.day, t.max_dofs, t.pcg_iterations
+            "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations{}",
+            "", load_s, sim.day, t.max_dofs, t.pcg_iterations, peak_memory_note()
         );
         if let Some(m) = stats.mechanics {
-            println!(
-                "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
-                "",
-                m.steps,
-                m.max_dofs,
-                m.symbolic,
-                m.seconds_symbolic,
-                m.numeric,
-                m.seconds_numeric,
-                m.seconds_solve,
-                m.seconds_assembly,
-                m.seconds_joints,
-                m.contact_iterations,
-                m.kept_closed_tension,
-                1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints) / m.steps.max(1) as f64
-            );
+            print_mechanics(&m);
         }
-        Ok(())
+        Ok(sim.joint_records)
     }
 
     /// One step of the complete dam: mechanical (skipped above
@@ -230,14 +296,17 @@ impl Timed<'_> {
                 .map_err(SimError::from)
                 .map_err(self.run_err(", complete dam mechanics"))?;
             println!(
-                "{:<22} complete dam mechanics: {} dofs ({} joint pairs), symbolic {:.2} s, step {:.2} s ({} numeric factorisations, {} contact passes)",
+                "{:<22} complete dam mechanics: {} dofs ({} joint pairs), factor {:.1}M entries, {:.2} Gflop; symbolic {:.2} s, step {:.2} s ({} numeric factorisations, {} contact passes){}",
                 "",
                 full.dofs,
                 full.pairs,
+                full.factor_nnz as f64 / 1e6,
+                full.factor_flops / 1e9,
                 full.symbolic_s,
                 full.step_s,
                 full.numeric,
-                full.passes
+                full.passes,
+                peak_memory_note()
             );
         }
         if scene.any_thermal() {
@@ -256,6 +325,56 @@ impl Timed<'_> {
         }
         Ok(())
     }
+}
+
+/// The process's peak resident memory so far [MiB] (Linux `VmHWM`; `None`
+/// elsewhere).
+pub fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+/// " peak memory N MiB" or nothing where the platform does not say.
+fn peak_memory_note() -> String {
+    peak_memory_mib().map_or(String::new(), |m| format!("; peak memory {m:.0} MiB"))
+}
+
+/// The mechanics' counters of a staged run: where the factorisations came
+/// from and what the capacitance correction took instead.
+fn print_mechanics(m: &MechStats) {
+    let r = &m.refactor_reasons;
+    println!(
+        "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
+        "",
+        m.steps,
+        m.max_dofs,
+        m.symbolic,
+        m.seconds_symbolic,
+        m.numeric,
+        m.seconds_numeric,
+        m.seconds_solve,
+        m.seconds_assembly,
+        m.seconds_joints,
+        m.contact_iterations,
+        m.kept_closed_tension,
+        1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints)
+            / m.steps.max(1) as f64
+    );
+    println!(
+        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined), {} columns, largest rank {}, {:.2} s",
+        "",
+        r.step,
+        r.grout,
+        r.contact,
+        r.rank,
+        m.capacitance_solves,
+        m.capacitance_refinements,
+        m.capacitance_columns,
+        m.capacitance_max_rank,
+        m.seconds_capacitance
+    );
 }
 
 fn solver_name(kind: ThermalSolverKind) -> &'static str {
@@ -337,6 +456,9 @@ pub struct FullDamMechCost {
     pub step_s: f64,
     pub numeric: usize,
     pub passes: usize,
+    /// entries of the factor and flops of one factorisation
+    pub factor_nnz: usize,
+    pub factor_flops: f64,
 }
 
 /// Pours every lift on day 0 (no thermal field) and times the first
@@ -357,7 +479,10 @@ pub fn full_dam_mechanics_step_cost(
     let t = Instant::now();
     m.step(0.0, 1.0, None, None)?;
     let step_s = t.elapsed().as_secs_f64();
+    let (factor_nnz, factor_flops) = m.factor_size();
     Ok(FullDamMechCost {
+        factor_nnz,
+        factor_flops,
         dofs: m.stats.max_dofs,
         pairs: m.state.joints.iter().filter(|j| j.paired).count(),
         symbolic_s: m.stats.seconds_symbolic,

@@ -13,8 +13,8 @@ use std::time::Instant;
 use faer::Mat;
 use groutready::fem::{
     capacity_consistent, capacity_lumped, conductivity, face_convection, hex8, nested_dissection,
-    relative_residual, volume_load, CholeskySolver, Ordering, Pattern, PatternError, SolveError,
-    SparseSym, NO_DOF,
+    relative_residual, volume_load, Capacitance, CholeskySolver, Ordering, Pattern, PatternError,
+    SolveError, SparseSym, NO_DOF,
 };
 use nalgebra::{DMatrix, DVector, SMatrix};
 
@@ -483,7 +483,7 @@ fn nested_dissection_is_a_permutation_and_gives_the_same_solution() {
     assert_eq!(nd.len(), n);
     let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
     let mut xs = Vec::new();
-    for ordering in [Ordering::Amd, Ordering::Custom(nd.clone())] {
+    for ordering in [Ordering::Amd, Ordering::Custom(nd.clone()), Ordering::Metis] {
         let mut solver =
             CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
         solver.factorize(&a).unwrap();
@@ -493,10 +493,25 @@ fn nested_dissection_is_a_permutation_and_gives_the_same_solution() {
         xs.push(x);
     }
     let scale = xs[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!(xs[0]
-        .iter()
-        .zip(&xs[1])
-        .all(|(p, q)| (p - q).abs() <= 1e-12 * scale));
+    for other in &xs[1..] {
+        assert!(xs[0]
+            .iter()
+            .zip(other)
+            .all(|(p, q)| (p - q).abs() <= 1e-12 * scale));
+    }
+    let metis = groutready::fem::metis_nested_dissection(a.pattern()).unwrap();
+    let mut sorted = metis.clone();
+    sorted.sort_unstable();
+    assert_eq!(
+        sorted,
+        (0..n as u32).collect::<Vec<_>>(),
+        "METIS gives a permutation"
+    );
+    assert_eq!(
+        metis,
+        groutready::fem::metis_nested_dissection(a.pattern()).unwrap(),
+        "METIS is deterministic"
+    );
     let mut not_perm = nd.clone();
     not_perm[0] = not_perm[1];
     assert!(matches!(
@@ -507,6 +522,87 @@ fn nested_dissection_is_a_permutation_and_gives_the_same_solution() {
         ),
         Err(SolveError::InvalidOrdering { .. })
     ));
+}
+
+/// The capacitance correction of a changed Dirichlet set, on the factor
+/// of the old set, equals a fresh factorisation of the changed system to
+/// round-off: rows newly fixed, rows released, and both, with prescribed
+/// values on every fixed row. A second solve whose changes it has met
+/// needs no new column.
+#[test]
+fn capacitance_correction_equals_a_fresh_factorisation() {
+    let mut rng = Rng(31);
+    let g = grid([6, 5, 4], 1.0, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(&g, 1.0, false);
+    let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+    let presc: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+    let rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
+    let mut m0 = a.clone();
+    m0.apply_dirichlet(&base);
+    let mut solver =
+        CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq).unwrap();
+    solver.factorize(&m0).unwrap();
+    let mut cap = Capacitance::new(base.clone());
+    let fix_more = |i: usize| base[i] || i % 7 == 1;
+    let release = |i: usize| base[i] && !i.is_multiple_of(10);
+    let both = |i: usize| (base[i] && !i.is_multiple_of(10)) || i % 7 == 1;
+    let cases: [(&str, &dyn Fn(usize) -> bool); 4] = [
+        ("fixed", &fix_more),
+        ("released", &release),
+        ("both", &both),
+        ("unchanged", &|i| base[i]),
+    ];
+    for (name, rule) in cases {
+        let fixed: Vec<bool> = (0..n).map(rule).collect();
+        let mut m1 = a.clone();
+        let mut rhs1 = rhs.clone();
+        m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
+        let mut fresh =
+            CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq)
+                .unwrap();
+        fresh.factorize(&m1).unwrap();
+        let mut x_ref = rhs1.clone();
+        fresh.solve_in_place(&mut x_ref).unwrap();
+        let columns = cap.stats.columns;
+        let x = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = x
+            .iter()
+            .zip(&x_ref)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        let changed = cap.changes(&fixed).len();
+        eprintln!(
+            "{name}: {changed} changed rows, max difference {:.2e} of {scale:.3e}",
+            diff
+        );
+        assert!(
+            diff <= 1e-11 * scale,
+            "{name}: differs by {diff:.3e} (scale {scale:.3e})"
+        );
+        let res = relative_residual(&m1, &x, &rhs1);
+        assert!(res < 1e-12, "{name}");
+        // the residual without forming the constrained matrix measures the same
+        let unformed = |x: &[f64]| {
+            groutready::fem::capacitance::constrained_residual(&a, &fixed, &presc, &rhs, x)
+        };
+        assert!(unformed(&x) < 1e-12, "{name}");
+        let mut off = x.clone();
+        off[1] += 0.1;
+        off[2] -= 0.2;
+        let (formed, unformed) = (relative_residual(&m1, &off, &rhs1), unformed(&off));
+        assert!(
+            (formed - unformed).abs() <= 1e-10 * formed,
+            "{name}: {formed:e} vs {unformed:e}"
+        );
+        if name == "both" {
+            assert!(changed > 20, "the case changes rows both ways");
+            assert_eq!(
+                cap.stats.columns, columns,
+                "every change was met by the first two cases"
+            );
+        }
+    }
 }
 
 /// Timing of pattern, assembly, symbolic and numeric Cholesky and one solve

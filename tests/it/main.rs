@@ -11,6 +11,7 @@ mod cli_run;
 mod contact_qp;
 mod contact_solvers_agree;
 mod demo_plan;
+mod fast_path;
 mod fem_elasticity;
 mod fem_elements;
 mod fem_sparse;
