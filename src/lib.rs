@@ -9,6 +9,7 @@
 pub mod app;
 pub mod fem;
 pub mod joint;
+pub mod machine;
 pub mod material;
 pub mod mechanics;
 pub mod mesh;

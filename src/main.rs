@@ -92,8 +92,8 @@ struct PlanArgs {
     /// (default: the scene's planner.horizon_days, else all).
     #[arg(long)]
     horizon_days: Option<u32>,
-    /// Simulate from day 0 even if the run folder has checkpoints (`tui`:
-    /// plan again even if the run folder's plan is up to date).
+    /// Simulate from day 0 even if the run folder has checkpoints (and, in
+    /// the TUI, plan again even when its plan is up to date).
     #[arg(long)]
     from_scratch: bool,
 }
@@ -113,7 +113,8 @@ impl PlanArgs {
 #[derive(Subcommand)]
 enum StudyCommand {
     /// Weekly update: a plan from scratch, the same plan restarted from its
-    /// run folder, and the plan after a schedule edit, timed.
+    /// run folder, and the plan after a schedule edit, timed (written to a
+    /// scratch folder under the system's temp dir, removed at the end).
     Restart {
         /// Scene (default: models/demo_arch.toml).
         scene: Option<PathBuf>,
@@ -147,7 +148,10 @@ enum StudyCommand {
 enum ScheduleCommand {
     /// Write a plausible construction schedule (pours, cooling, grouting) for a scene.
     Synth {
+        /// Scene whose dam the schedules are for (blocks, lifts, joints, zones).
         scene: PathBuf,
+        /// Folder to write pours.csv, cooling.csv, grouting.csv (and
+        /// reservoir.csv when the scene simulates the reservoir) into.
         #[arg(long)]
         out: PathBuf,
         /// Overwrite the schedule files already in --out.

@@ -91,6 +91,7 @@ pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<In
     let schedules = schedule::load(&dir)?;
     let mesh = build_mesh(&scene, &scene_path.display().to_string())?;
     schedule::check_against(&schedules, &dam_layout(&mesh))?;
+    schedule::check_dates(&schedules, scene.epoch.0)?;
     Ok(Inputs {
         scene_path: scene_path.to_path_buf(),
         scene,

@@ -90,6 +90,16 @@ fn check_size(ni: usize, nj: usize, nk: usize) -> Result<(), MeshError> {
             limit: MAX_ENTITIES,
         });
     }
+    // the mesh's own share of a simulation, before anything is allocated
+    let needed = crate::machine::simulation_memory_lower_bound(elements, nodes, false, false);
+    if let Some(total) = crate::machine::total_memory_bytes().filter(|&t| needed > t) {
+        return Err(MeshError::TooMuchMemory {
+            nodes,
+            elements,
+            needed_gib: crate::machine::gib(needed),
+            total_gib: crate::machine::gib(total),
+        });
+    }
     Ok(())
 }
 

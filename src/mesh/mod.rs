@@ -94,6 +94,14 @@ pub enum MeshError {
         elements: u64,
         limit: u64,
     },
+    /// Even the mesh of the parameters would not fit in the machine's memory.
+    #[error("mesh too large for this machine: {nodes} nodes, {elements} elements need at least {needed_gib:.1} GiB, the machine has {total_gib:.1} GiB (use fewer elements per block, across or per lift)")]
+    TooMuchMemory {
+        nodes: u64,
+        elements: u64,
+        needed_gib: f64,
+        total_gib: f64,
+    },
     /// An element is inverted or degenerate.
     #[error("element {elem}: Jacobian determinant {det:.6e} <= 0 at corner {corner}")]
     NonPositiveJacobian {

@@ -242,8 +242,10 @@ pub struct PlanStats {
     /// first day simulated by the baseline: None from scratch, else the date
     /// of the checkpoint it restarted from
     pub restarted_from: Option<NaiveDate>,
-    /// re-simulations of the remedy search and their total seconds
+    /// re-simulations of the remedy search
     pub resimulations: usize,
+    /// wall time of the remedy search (its re-simulations run two at a
+    /// time, so this is not their sum)
     pub resimulation_seconds: f64,
     pub total_seconds: f64,
 }

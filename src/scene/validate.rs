@@ -199,6 +199,15 @@ fn time(t: &TimeStepping, s: &Scene) -> Check {
             ),
         ));
     }
+    if !(1..=30).contains(&t.mechanics_max_step_days) {
+        return Err(SceneError::invalid(
+            "time.mechanics_max_step_days",
+            format!(
+                "time.mechanics_max_step_days must be a whole number of days in 1..=30, got {}",
+                t.mechanics_max_step_days
+            ),
+        ));
+    }
     if !(0.5..=1.0).contains(&t.theta) {
         return Err(SceneError::invalid(
             "time.theta",

@@ -428,3 +428,55 @@ pub fn validate(s: &Schedules) -> Result<(), ScheduleError> {
     }
     Ok(())
 }
+
+/// How far after the scene's epoch a scheduled date may lie [years]: the
+/// longest dam constructions take about a decade, so a date beyond this is
+/// a typo (a grouting planned in 2099 asked for a 27,539-day simulation).
+pub const MAX_SCHEDULE_YEARS: i32 = 20;
+
+/// Checks the schedule's dates against the scene's epoch: no pour, cooling
+/// stage, grouting or joint meter dated before it (a lift poured before the
+/// epoch otherwise failed 43 days into the run as a singular matrix), none
+/// more than [`MAX_SCHEDULE_YEARS`] after it. Weather and reservoir series
+/// may extend either way (they are interpolated where the run needs them).
+/// The first offending row is returned, file by file.
+pub fn check_dates(s: &Schedules, epoch: NaiveDate) -> Result<(), ScheduleError> {
+    let latest = epoch
+        .checked_add_months(chrono::Months::new(12 * MAX_SCHEDULE_YEARS as u32))
+        .unwrap_or(NaiveDate::MAX);
+    let check = |file: &str, header: &[&str], line: usize, col: usize, date: NaiveDate| {
+        let expected = if date < epoch {
+            format!("expected a date on or after the scene's epoch {epoch}")
+        } else if date > latest {
+            format!(
+                "expected a date within {MAX_SCHEDULE_YEARS} years of the scene's epoch {epoch} (by {latest})"
+            )
+        } else {
+            return Ok(());
+        };
+        Err(cell_error(
+            file,
+            header,
+            line,
+            col,
+            expected,
+            &date.to_string(),
+        ))
+    };
+    for p in &s.pours {
+        check(POURS_CSV, &POURS_HEADER, p.line, 2, p.date)?;
+    }
+    for c in &s.cooling {
+        check(COOLING_CSV, &COOLING_HEADER, c.line, 4, c.start)?;
+        if let Some(end) = c.end {
+            check(COOLING_CSV, &COOLING_HEADER, c.line, 5, end)?;
+        }
+    }
+    for g in &s.grouting {
+        check(GROUTING_CSV, &GROUTING_HEADER, g.line, 2, g.planned)?;
+    }
+    for m in s.joint_meters.iter().flatten() {
+        check(JOINT_METERS_CSV, &JOINT_METERS_HEADER, m.line, 3, m.date)?;
+    }
+    Ok(())
+}

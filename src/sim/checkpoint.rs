@@ -162,15 +162,20 @@ impl Simulation<'_> {
     }
 
     pub(super) fn maybe_checkpoint(&mut self) {
+        if self.checkpoint_due() {
+            self.checkpoints.push(self.checkpoint());
+        }
+    }
+
+    /// Is a checkpoint due at the current day?
+    pub(super) fn checkpoint_due(&self) -> bool {
         let Some(every) = self.checkpoint_every else {
-            return;
+            return false;
         };
         let due = self
             .checkpoints
             .last()
             .map_or(Day(every), |c| c.day.plus(every));
-        if self.day >= due.t() {
-            self.checkpoints.push(self.checkpoint());
-        }
+        self.day >= due.t()
     }
 }

@@ -46,6 +46,15 @@ pub enum SimError {
     NoReservoir(String),
     #[error("cancelled on {0}")]
     Cancelled(NaiveDate),
+    /// The scene's models would not fit in the machine's memory.
+    #[error("the simulation needs at least {needed_gib:.1} GiB ({elements} elements, {nodes} nodes{what}), the machine has {total_gib:.1} GiB: use a coarser mesh")]
+    TooLarge {
+        elements: u64,
+        nodes: u64,
+        what: &'static str,
+        needed_gib: f64,
+        total_gib: f64,
+    },
     #[error("writing the snapshot of {date}: {source}")]
     Snapshot {
         date: NaiveDate,
@@ -143,6 +152,7 @@ impl<'a> Simulation<'a> {
     /// Prepares a run; nothing is simulated yet. The thermal model exists only
     /// if the scene switches on a thermal effect.
     pub fn new(scene: &'a Scene, mesh: &'a Mesh, schedules: &Schedules) -> Result<Self, SimError> {
+        check_memory(scene, mesh)?;
         let epoch = scene.epoch;
         let stages = planned_stages(epoch, schedules);
         let tl = Timeline::of(scene, schedules, &stages);
@@ -329,7 +339,9 @@ impl<'a> Simulation<'a> {
             // thermal steps): the thermal strain is a difference of states, so
             // the sub-day thermal steps after a pour add up exactly, and every
             // pour and grouting date is a midnight.
-            if self.day.fract() == 0.0 || self.day >= end {
+            let stepped =
+                (self.day.fract() == 0.0 || self.day >= end) && self.mechanical_step_due(end);
+            if stepped {
                 self.mechanical_step()?;
             }
             self.ladder.grow(&self.scene.time);
@@ -338,7 +350,9 @@ impl<'a> Simulation<'a> {
             }
             self.apply_events(snapshots.as_deref_mut())?;
             if self.day.fract() == 0.0 {
-                self.begin_mechanical_step();
+                if stepped {
+                    self.begin_mechanical_step();
+                }
                 self.record();
             }
             progress(self.day, end);
@@ -350,6 +364,20 @@ impl<'a> Simulation<'a> {
             mechanics: self.mechanics.as_ref().map(|m| m.stats),
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Does the pending mechanical step end at this midnight? Always with
+    /// `time.mechanics_max_step_days = 1`; otherwise when it spans that many
+    /// days, at the end, on a day with events or a read history row (pours,
+    /// grouting, stage changes, snapshots, observed days) and on a
+    /// checkpoint day (a checkpoint holds no pending step).
+    fn mechanical_step_due(&self, end: f64) -> bool {
+        let longest = self.scene.time.mechanics_max_step_days;
+        longest <= 1
+            || self.day >= end
+            || self.day - self.mech_t0 >= f64::from(longest)
+            || self.timeline.at(self.day).is_some()
+            || self.checkpoint_due()
     }
 
     /// Remembers the start of the next mechanical step (after the day's events).
@@ -448,6 +476,26 @@ impl<'a> Simulation<'a> {
         self.joint_records
             .rows
             .push((Day::containing(self.day), row));
+    }
+}
+
+/// Refuses a scene whose models cannot fit in the machine's memory, before
+/// any is built (a lower bound: [`crate::machine::simulation_memory_lower_bound`]).
+fn check_memory(scene: &Scene, mesh: &Mesh) -> Result<(), SimError> {
+    let (elements, nodes) = (mesh.elements.len() as u64, mesh.nodes.len() as u64);
+    let mechanics = scene.any_mechanical();
+    let direct =
+        scene.any_thermal() && scene.solver.thermal == crate::scene::ThermalSolverKind::Cholesky;
+    let needed = crate::machine::simulation_memory_lower_bound(elements, nodes, mechanics, direct);
+    match crate::machine::total_memory_bytes() {
+        Some(total) if needed > total => Err(SimError::TooLarge {
+            elements,
+            nodes,
+            what: if mechanics { ", with mechanics" } else { "" },
+            needed_gib: crate::machine::gib(needed),
+            total_gib: crate::machine::gib(total),
+        }),
+        _ => Ok(()),
     }
 }
 

@@ -146,9 +146,12 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 mesh: &mesh,
             };
             let fast = timed.staged_run(&schedules, max_days, load_s)?;
-            if exact && scene.has(Effect::Joints) && scene.solver.contact_capacitance {
+            let fast_path =
+                scene.solver.contact_capacitance || scene.time.mechanics_max_step_days > 1;
+            if exact && scene.has(Effect::Joints) && fast_path {
                 let mut exact_scene = scene.clone();
                 exact_scene.solver.contact_capacitance = false;
+                exact_scene.time.mechanics_max_step_days = 1;
                 let exact_run = Timed {
                     label: format!("{stem}/exact"),
                     scene: &exact_scene,
@@ -327,18 +330,11 @@ impl Timed<'_> {
     }
 }
 
-/// The process's peak resident memory so far [MiB] (Linux `VmHWM`; `None`
-/// elsewhere).
-pub fn peak_memory_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib / 1024.0)
-}
-
-/// " peak memory N MiB" or nothing where the platform does not say.
+/// "; peak memory N MiB" or nothing where the platform does not say.
 fn peak_memory_note() -> String {
-    peak_memory_mib().map_or(String::new(), |m| format!("; peak memory {m:.0} MiB"))
+    crate::machine::peak_memory_bytes().map_or(String::new(), |b| {
+        format!("; peak memory {:.0} MiB", b as f64 / (1u64 << 20) as f64)
+    })
 }
 
 /// The mechanics' counters of a staged run: where the factorisations came

@@ -14,6 +14,10 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
     let mut inputs = app::load_inputs(scene, None)?;
     let tmp = tempfile_dir()?;
     let out = tmp.join("plan");
+    println!(
+        "planning into {} (a scratch folder, removed at the end)",
+        out.display()
+    );
     let quiet = &mut |_| {};
     let time = |inputs: &app::Inputs,
                 req: &PlanRequest,

@@ -1,11 +1,17 @@
-//! The fast path of the mechanics equals the exact path where the planner
-//! reads it: on the small dam with joints (five blocks, pipe cooling, creep,
-//! self-weight, friction), the whole construction solved once with the
-//! capacitance correction of contact-set changes (the default) and once
-//! refactorising at every change (`solver.contact_capacitance = false`).
+//! The fast paths of the mechanics against the exact path where the planner
+//! reads them: on the small dam with joints (five blocks, pipe cooling,
+//! creep, self-weight, friction), the whole construction solved
+//! - on the exact path: a mechanical step every midnight, refactorising at
+//!   every contact-set change (`solver.contact_capacitance = false`);
+//! - with the capacitance correction of contact-set changes (the default,
+//!   exact): the same apertures to round-off, fewer factorisations;
+//! - with mechanical steps of up to 3 days between events
+//!   (`time.mechanics_max_step_days = 3`, an opt-in approximation): fewer
+//!   steps, apertures within a measured bound.
+//!
 //! Compared: the aperture and the state of every zone point and zone
 //! minimum on each zone's planned grouting date (ISSUE 12: within 0.01 mm,
-//! same states), and that the fast path did take fewer factorisations.
+//! same states).
 
 use std::path::Path;
 
@@ -14,10 +20,14 @@ use groutready::mechanics::MechStats;
 use groutready::sim::{JointRecords, Simulation};
 use groutready::vocab::ZoneId;
 
-fn run(capacitance: bool) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
+fn run(
+    capacitance: bool,
+    mechanics_step_days: u32,
+) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut inputs = app::load_inputs(&root.join("models/small_dam_joints.toml"), None).unwrap();
     inputs.scene.solver.contact_capacitance = capacitance;
+    inputs.scene.time.mechanics_max_step_days = mechanics_step_days;
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
     let stats = sim.run(None, &mut |_, _| {}).unwrap();
     let dates = inputs
@@ -33,14 +43,17 @@ fn run(capacitance: bool) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::Naiv
     )
 }
 
-#[test]
-fn capacitance_path_equals_refactorising_at_the_grouting_dates() {
-    let (fast, fast_stats, dates) = run(true);
-    let (exact, exact_stats, _) = run(false);
+/// Largest aperture difference [m] and differing states of `a` against
+/// `b` over every zone sample on its grouting date.
+fn at_grouting_dates(
+    a: &JointRecords,
+    b: &JointRecords,
+    dates: &[(ZoneId, chrono::NaiveDate)],
+) -> (usize, f64, usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scene = groutready::scene::Scene::load(&root.join("models/small_dam_joints.toml")).unwrap();
-    let (mut compared, mut largest, mut closed) = (0, 0.0f64, 0);
-    for (zone, date) in &dates {
+    let (mut compared, mut largest, mut differ) = (0, 0.0f64, 0);
+    for (zone, date) in dates {
         let day = scene.epoch.day(*date);
         let row = |r: &JointRecords| {
             r.rows
@@ -49,34 +62,35 @@ fn capacitance_path_equals_refactorising_at_the_grouting_dates() {
                 .map(|(_, s)| s.clone())
                 .unwrap_or_else(|| panic!("{zone:?}: no joint row on {date}"))
         };
-        let (f, e) = (row(&fast), row(&exact));
-        for (c, col) in fast.columns.iter().enumerate() {
+        let (ra, rb) = (row(a), row(b));
+        for (c, col) in a.columns.iter().enumerate() {
             if col.zone != *zone {
                 continue;
             }
-            let (Some(f), Some(e)) = (f[c], e[c]) else {
+            let (Some(sa), Some(sb)) = (ra[c], rb[c]) else {
                 panic!(
                     "{zone:?} {:?}: no sample on its grouting date {date}",
                     col.point
                 );
             };
-            let diff = (f.aperture - e.aperture).abs();
-            largest = largest.max(diff);
-            assert!(
-                diff <= 1e-5,
-                "{zone:?} {:?} on {date}: apertures {:.6} mm (fast) and {:.6} mm (exact)",
-                col.point,
-                1e3 * f.aperture,
-                1e3 * e.aperture
-            );
-            assert_eq!(f.state, e.state, "{zone:?} {:?} on {date}", col.point);
-            closed += usize::from(f.state != groutready::vocab::JointState::Open);
+            largest = largest.max((sa.aperture - sb.aperture).abs());
+            differ += usize::from(sa.state != sb.state);
             compared += 1;
         }
     }
+    (compared, largest, differ)
+}
+
+#[test]
+fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
+    let (exact, exact_stats, dates) = run(false, 1);
+    let (fast, fast_stats, _) = run(true, 1);
+    let (long, long_stats, _) = run(true, 3);
+
+    let (compared, largest, differ) = at_grouting_dates(&fast, &exact, &dates);
     eprintln!(
-        "{compared} zone samples at their grouting dates ({closed} closed): apertures differ by at most {:.2e} mm; \
-         factorisations {} (fast, {} capacitance solves, largest rank {}) against {} (exact)",
+        "capacitance: {compared} zone samples at their grouting dates: apertures differ by at most {:.2e} mm, \
+         {differ} states differ; factorisations {} ({} capacitance solves, largest rank {}) against {} (exact)",
         1e3 * largest,
         fast_stats.numeric,
         fast_stats.capacitance_solves,
@@ -84,6 +98,12 @@ fn capacitance_path_equals_refactorising_at_the_grouting_dates() {
         exact_stats.numeric
     );
     assert!(compared >= 4 * dates.len(), "every zone is read");
+    assert!(
+        largest <= 1e-12,
+        "exact to round-off: {:.3e} mm",
+        1e3 * largest
+    );
+    assert_eq!(differ, 0);
     assert_eq!(exact_stats.capacitance_solves, 0);
     assert!(
         exact_stats.refactor_reasons.contact > 0,
@@ -94,4 +114,31 @@ fn capacitance_path_equals_refactorising_at_the_grouting_dates() {
         fast_stats.numeric < exact_stats.numeric,
         "the correction replaces factorisations"
     );
+
+    let (_, largest, differ) = at_grouting_dates(&long, &exact, &dates);
+    eprintln!(
+        "3-day mechanical steps: {} steps against {}; apertures differ by at most {:.4} mm, {differ} states differ",
+        long_stats.steps,
+        exact_stats.steps,
+        1e3 * largest
+    );
+    assert!(
+        long_stats.steps < exact_stats.steps,
+        "longer steps are fewer"
+    );
+    assert!(largest <= LONG_STEP_BOUND_M, "{:.4} mm", 1e3 * largest);
+    assert!(
+        largest > 0.0,
+        "the approximation changes the answer: it is measured"
+    );
 }
+
+/// What 3-day mechanical steps may cost at the grouting dates of the small
+/// dam. Measured 0.585 mm (26 % fewer steps): far above the 0.01 mm the
+/// planner can ignore, which is why the setting is off by default. The
+/// differences start in the first days after the first pours (0.01 mm by
+/// day 35), where the modulus of the young concrete changes fastest within
+/// a step, and grow with the history; the same size says the daily step of
+/// the exact path deserves its own convergence study (issue 13). This bound
+/// keeps the figure from growing unnoticed.
+const LONG_STEP_BOUND_M: f64 = 0.7e-3;

@@ -595,6 +595,21 @@ fn bad_parameters_are_errors() {
         MeshError::TooLarge { .. }
     ));
 
+    // Indexable but beyond any machine (it aborted on a 17 GB allocation):
+    // refused before anything is allocated, with the estimate.
+    let mut p = demo_arch();
+    p.elements_per_block = 100_000;
+    let e = generate_arch(&p, 3.0, 9.0).unwrap_err();
+    assert!(
+        matches!(e, MeshError::TooMuchMemory { needed_gib, total_gib, .. } if needed_gib > total_gib),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .starts_with("mesh too large for this machine: "),
+        "{e}"
+    );
+
     let mut p = demo_arch();
     p.n_blocks = 1;
     assert_eq!(

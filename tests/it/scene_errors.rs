@@ -225,6 +225,23 @@ fn theta_out_of_range() {
 }
 
 #[test]
+fn mechanics_step_out_of_range() {
+    for bad in [0, 31] {
+        let text = format!("{BASE}\n[time]\nmechanics_max_step_days = {bad}\n");
+        assert_eq!(
+            err(&text),
+            format!("models/x.toml: time.mechanics_max_step_days must be a whole number of days in 1..=30, got {bad}")
+        );
+    }
+    let text = format!("{BASE}\n[time]\nmechanics_max_step_days = 2.5\n");
+    assert!(
+        err(&text).contains("mechanics_max_step_days"),
+        "{}",
+        err(&text)
+    );
+}
+
+#[test]
 fn bad_epoch_string() {
     let text = replaced(BASE, "epoch = 2024-01-01", "epoch = \"2024-13-01\"");
     assert_eq!(

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use chrono::NaiveDate;
 use groutready::schedule::{
-    check_against, load, synthesize, validate, write_dir, DamLayout, Schedules, Stage, SynthParams,
-    ZoneExtent,
+    check_against, check_dates, load, synthesize, validate, write_dir, DamLayout, Schedules, Stage,
+    SynthParams, ZoneExtent,
 };
 use groutready::vocab::ZonePoint;
 use tempfile::TempDir;
@@ -637,4 +637,49 @@ fn synthesized_schedule_round_trips_and_fits_its_layout() {
     let back = load(out.path()).unwrap();
     assert_eq!(normalized(back.clone()), normalized(s.clone()));
     assert_eq!(back.cooling, s.cooling, "line numbers as written");
+}
+
+// ------------------------------------------------------- dates vs epoch
+
+/// A lift poured before the scene's epoch is refused before the run, at its
+/// cell (it used to fail 43 days in as a singular matrix); so are cooling,
+/// grouting and meters dated before it.
+#[test]
+fn dates_before_the_epoch() {
+    let s = load(&fixture()).unwrap();
+    assert_eq!(check_dates(&s, d(2025, 1, 1)), Ok(()));
+    assert_eq!(
+        check_dates(&s, d(2025, 1, 6)).unwrap_err().to_string(),
+        "pours.csv:2:3 (pour_date): expected a date on or after the scene's epoch 2025-01-06, found \"2025-01-05\""
+    );
+    // pours fine, the first cooling stage starts before the epoch
+    let mut late_cooling = s.clone();
+    late_cooling
+        .pours
+        .iter_mut()
+        .for_each(|p| p.date = d(2025, 2, 1));
+    let err = check_dates(&late_cooling, d(2025, 1, 6))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "cooling.csv:2:5 (start_date): expected a date on or after the scene's epoch 2025-01-06, found \"2025-01-05\""
+    );
+}
+
+/// A date decades after the epoch is a typo, refused at its cell (a
+/// grouting planned in 2099 started a 27,539-day simulation without a word).
+#[test]
+fn dates_decades_after_the_epoch() {
+    let dir = copy_fixture();
+    let path = dir.path().join("grouting.csv");
+    let text = fs::read_to_string(&path)
+        .unwrap()
+        .replacen("2025-04-22", "2099-04-22", 1);
+    fs::write(&path, text).unwrap();
+    let s = load(dir.path()).unwrap();
+    assert_eq!(
+        check_dates(&s, d(2025, 1, 1)).unwrap_err().to_string(),
+        "grouting.csv:3:3 (planned_date): expected a date within 20 years of the scene's epoch 2025-01-01 (by 2045-01-01), found \"2099-04-22\""
+    );
 }
