@@ -92,6 +92,9 @@ pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<In
     let mesh = build_mesh(&scene, &scene_path.display().to_string())?;
     schedule::check_against(&schedules, &dam_layout(&mesh))?;
     schedule::check_dates(&schedules, scene.epoch.0)?;
+    if let Some(&base) = mesh.layer_z.first() {
+        schedule::check_reservoir(&schedules, base, mesh.crest_z)?;
+    }
     Ok(Inputs {
         scene_path: scene_path.to_path_buf(),
         scene,
@@ -196,8 +199,8 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
     }
     if let Some(m) = &stats.mechanics {
         s += &format!(
-            "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes, max live dofs {}\n",
-            m.steps, m.symbolic, m.numeric, m.contact_iterations, m.max_dofs
+            "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes, max live dofs {} ({} free, the others supported)\n",
+            m.steps, m.symbolic, m.numeric, m.contact_iterations, m.max_dofs, m.max_free_dofs
         );
     }
     s

@@ -93,8 +93,11 @@ pub struct MechStats {
     pub symbolic: usize,
     /// numeric factorisations, the contact solves' included
     pub numeric: usize,
-    /// largest live system [dofs]
+    /// largest live system [dofs], supported ones included
     pub max_dofs: usize,
+    /// largest number of free (not supported) dofs of a live system
+    #[serde(default)]
+    pub max_free_dofs: usize,
     /// wall time of the rebuilds [s]
     pub seconds_symbolic: f64,
     /// wall time of the numeric factorisations [s]
@@ -412,6 +415,8 @@ impl MechanicsModel {
         )?;
         self.stats.symbolic += 1;
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
+        let free = sys.supported.iter().filter(|&&s| !s).count();
+        self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         self.sys = sys;
         self.dirty = false;

@@ -16,7 +16,7 @@ use super::write;
 use super::{
     CoolingStage, GroutingPlan, JointMeter, Pour, Schedules, COOLING_CSV, COOLING_HEADER,
     GROUTING_CSV, GROUTING_HEADER, JOINT_METERS_CSV, JOINT_METERS_HEADER, POURS_CSV, POURS_HEADER,
-    RESERVOIR_CSV, WEATHER_CSV, WEATHER_HEADER,
+    RESERVOIR_CSV, RESERVOIR_HEADER, WEATHER_CSV, WEATHER_HEADER,
 };
 
 /// Placement temperature range, °C.
@@ -477,6 +477,33 @@ pub fn check_dates(s: &Schedules, epoch: NaiveDate) -> Result<(), ScheduleError>
     }
     for m in s.joint_meters.iter().flatten() {
         check(JOINT_METERS_CSV, &JOINT_METERS_HEADER, m.line, 3, m.date)?;
+    }
+    Ok(())
+}
+
+/// How far above the crest a reservoir level may lie, as a fraction of the
+/// dam's height: a flood may overtop a dam under construction a little; a
+/// level far above is a typo (a digit too many).
+pub const MAX_LEVEL_ABOVE_CREST: f64 = 0.1;
+
+/// Checks the reservoir levels against the dam: none more than
+/// [`MAX_LEVEL_ABOVE_CREST`] of its height above its crest. A level below
+/// the base is an empty reservoir, which is allowed.
+pub fn check_reservoir(s: &Schedules, base_z: f64, crest_z: f64) -> Result<(), ScheduleError> {
+    let highest = crest_z + MAX_LEVEL_ABOVE_CREST * (crest_z - base_z);
+    for (i, &(_, level)) in s.reservoir.iter().flatten().enumerate() {
+        if level > highest {
+            return Err(cell_error(
+                RESERVOIR_CSV,
+                &RESERVOIR_HEADER,
+                i + 2,
+                1,
+                format!(
+                    "expected a level at most {highest} m (the dam's crest is at {crest_z} m, its base at {base_z} m)"
+                ),
+                &write::num(level),
+            ));
+        }
     }
     Ok(())
 }

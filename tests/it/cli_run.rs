@@ -171,6 +171,87 @@ fn bad_scene_names_the_key_and_writes_nothing() {
     only(tmp.path(), &["scene.toml"]);
 }
 
+/// A pour dated before the scene's epoch is refused before the run at its
+/// cell (it used to fail 43 days in as "matrix is not positive definite"),
+/// and nothing is written.
+#[test]
+fn a_pour_before_the_epoch_is_refused_before_the_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo("models/two_blocks.toml")).unwrap();
+    let first_pour = std::fs::read_to_string(repo("schedules/two_blocks/pours.csv"))
+        .unwrap()
+        .lines()
+        .nth(1)
+        .and_then(|l| l.split(',').nth(2).map(String::from))
+        .unwrap();
+    // the epoch a day after the first pour
+    let day_after = chrono::NaiveDate::parse_from_str(&first_pour, "%Y-%m-%d").unwrap()
+        + chrono::Duration::days(1);
+    let epoch_line = text
+        .lines()
+        .find(|l| l.starts_with("epoch"))
+        .unwrap()
+        .to_string();
+    let text = text
+        .replace(&epoch_line, &format!("epoch = {day_after}"))
+        .replace(
+            "../schedules/two_blocks",
+            &repo("schedules/two_blocks").display().to_string(),
+        );
+    let scene = tmp.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let o = bin()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!(
+            "pours.csv:2:3 (pour_date): expected a date on or after the scene's epoch {day_after}, found \"{first_pour}\""
+        )),
+        "{err}"
+    );
+    only(tmp.path(), &["scene.toml"]);
+}
+
+/// A mesh that cannot fit in the machine's memory is refused at once with
+/// the estimate (it used to abort on a 17 GB allocation), nothing written.
+#[test]
+fn a_mesh_beyond_the_machine_is_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo("models/demo_arch.toml")).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("elements_per_block"))
+        .unwrap()
+        .to_string();
+    let text = text.replace(&line, "elements_per_block = 100000").replace(
+        "../schedules/demo_arch",
+        &repo("schedules/demo_arch").display().to_string(),
+    );
+    let scene = tmp.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let t = std::time::Instant::now();
+    let o = bin()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .output()
+        .unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("mesh too large for this machine: "), "{err}");
+    assert!(err.contains("GiB, the machine has "), "{err}");
+    eprintln!("refused in {seconds:.3} s: {err}");
+    only(tmp.path(), &["scene.toml"]);
+}
+
 #[test]
 fn usage_errors_exit_2() {
     let o = bin().args(["run", "--no-such-flag"]).output().unwrap();

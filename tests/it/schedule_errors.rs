@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use chrono::NaiveDate;
 use groutready::schedule::{
-    check_against, check_dates, load, synthesize, validate, write_dir, DamLayout, Schedules, Stage,
-    SynthParams, ZoneExtent,
+    check_against, check_dates, check_reservoir, load, synthesize, validate, write_dir, DamLayout,
+    Schedules, Stage, SynthParams, ZoneExtent,
 };
 use groutready::vocab::ZonePoint;
 use tempfile::TempDir;
@@ -682,4 +682,22 @@ fn dates_decades_after_the_epoch() {
         check_dates(&s, d(2025, 1, 1)).unwrap_err().to_string(),
         "grouting.csv:3:3 (planned_date): expected a date within 20 years of the scene's epoch 2025-01-01 (by 2045-01-01), found \"2099-04-22\""
     );
+}
+
+/// A reservoir level far above the crest is a typo (a digit too many),
+/// refused at its cell; up to a tenth of the dam's height above the crest
+/// (a flood over a dam under construction) and below its base (an empty
+/// reservoir) are allowed.
+#[test]
+fn reservoir_far_above_the_crest() {
+    let s = load(with_line("reservoir.csv", "2025-09-01,11300").path()).unwrap();
+    // a dam from 1000 m to 1130 m: up to 1143 m is allowed
+    assert_eq!(
+        check_reservoir(&s, 1000.0, 1130.0).unwrap_err().to_string(),
+        "reservoir.csv:4:2 (level_m): expected a level at most 1143 m (the dam's crest is at 1130 m, its base at 1000 m), found \"11300\""
+    );
+    let s = load(with_line("reservoir.csv", "2025-09-01,1143").path()).unwrap();
+    assert_eq!(check_reservoir(&s, 1000.0, 1130.0), Ok(()));
+    let s = load(with_line("reservoir.csv", "2025-09-01,900").path()).unwrap();
+    assert_eq!(check_reservoir(&s, 1000.0, 1130.0), Ok(()));
 }
