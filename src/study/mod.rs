@@ -443,6 +443,10 @@ fn all_lifts(mesh: &crate::mesh::Mesh) -> Vec<(u32, u32)> {
     lifts
 }
 
+/// Contact passes the complete-dam step may take (at least; a scene's own
+/// larger cap stands).
+pub const COMPLETE_STEP_MAX_PASSES: usize = 300;
+
 /// Cost of one mechanical step of the complete dam.
 #[derive(Debug, Clone, Copy)]
 pub struct FullDamMechCost {
@@ -459,14 +463,21 @@ pub struct FullDamMechCost {
 
 /// Pours every lift on day 0 (no thermal field) and times the first
 /// mechanical step: self-weight of the whole dam on its joints, with the
-/// scene's mechanical effects and contact solver.
+/// scene's mechanical effects and contact solver, allowed
+/// [`COMPLETE_STEP_MAX_PASSES`] contact passes.
 pub fn full_dam_mechanics_step_cost(
     scene: &Scene,
     mesh: &crate::mesh::Mesh,
 ) -> Result<FullDamMechCost, MechError> {
+    let mut settings =
+        crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?;
+    // Every joint closing at once is the hard case, not a construction
+    // step: the Xiaowan-like arch needs 126 passes (measured), more than a
+    // scene's default cap of 60.
+    settings.joint.max_iterations = settings.joint.max_iterations.max(COMPLETE_STEP_MAX_PASSES);
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
-        &crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?,
+        &settings,
         &crate::mechanics::Supports::far_boundary(mesh),
     )?;
     for (block, lift) in all_lifts(mesh) {
