@@ -115,17 +115,42 @@ pub enum RowChange {
     Fixed,
 }
 
-/// What the corrections cost so far.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+/// What the corrections cost: counted per factor here, summed per step by
+/// the contact solve and per run by the mechanics' counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CapacitanceStats {
     /// corrected solves
     pub solves: u64,
     /// columns of Z computed (each a right-hand side of the base factor)
     pub columns: u64,
-    /// largest capacitance system
+    /// largest capacitance system [changed rows]
     pub max_rank: usize,
     /// refinements on the residual
     pub refinements: u64,
+    /// wall time of the corrections [s]
+    pub seconds: f64,
+}
+
+impl CapacitanceStats {
+    /// Adds `other`'s counts and time (the largest rank of both).
+    pub fn add(&mut self, other: &CapacitanceStats) {
+        self.solves += other.solves;
+        self.columns += other.columns;
+        self.max_rank = self.max_rank.max(other.max_rank);
+        self.refinements += other.refinements;
+        self.seconds += other.seconds;
+    }
+
+    /// What was added since `before` (the largest rank is this one's).
+    pub fn since(&self, before: &CapacitanceStats) -> CapacitanceStats {
+        CapacitanceStats {
+            solves: self.solves - before.solves,
+            columns: self.columns - before.columns,
+            max_rank: self.max_rank,
+            refinements: self.refinements - before.refinements,
+            seconds: self.seconds - before.seconds,
+        }
+    }
 }
 
 /// The base fixed set of a factor and the columns of Z met so far.
@@ -191,6 +216,7 @@ impl Capacitance {
         presc: &[f64],
         rhs: &[f64],
     ) -> Result<Vec<f64>, SolveError> {
+        let t = std::time::Instant::now();
         let n = a.n();
         if fixed.len() != n || presc.len() != n || rhs.len() != n || self.base.len() != n {
             return Err(SolveError::DimensionMismatch {
@@ -220,6 +246,7 @@ impl Capacitance {
         }
         self.stats.solves += 1;
         self.stats.max_rank = self.stats.max_rank.max(changes.len());
+        self.stats.seconds += t.elapsed().as_secs_f64();
         Ok(x)
     }
 

@@ -53,7 +53,7 @@
 use std::time::Instant;
 
 use crate::fem::capacitance::constrained_residual;
-use crate::fem::{relative_residual, Capacitance, SolveError, SparseSym};
+use crate::fem::{relative_residual, Capacitance, CapacitanceStats, SolveError, SparseSym};
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
 
@@ -129,16 +129,8 @@ pub struct JointStepOutcome {
     pub kept_closed_tension: f64,
     /// why each factorisation was made
     pub refactor_reasons: RefactorCounts,
-    /// passes solved by the capacitance correction
-    pub capacitance_solves: usize,
-    /// right-hand sides of the base factor those corrections needed
-    pub capacitance_columns: usize,
-    /// largest capacitance system (changed rows)
-    pub capacitance_max_rank: usize,
-    /// refinements of corrected solutions on their residual
-    pub capacitance_refinements: usize,
-    /// wall time of the corrections [s]
-    pub seconds_capacitance: f64,
+    /// the capacitance corrections that replaced factorisations
+    pub capacitance: CapacitanceStats,
 }
 
 /// Why the joint solve factorised.
@@ -499,15 +491,9 @@ impl ActiveSet {
             return solve_checked(live, &self.m, &rhs, &mut trial.out);
         }
         let before = cap.stats;
-        let t = Instant::now();
         let x = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
-        let out = &mut trial.out;
-        out.seconds_capacitance += t.elapsed().as_secs_f64();
-        out.capacitance_solves += 1;
-        out.capacitance_columns += (cap.stats.columns - before.columns) as usize;
-        out.capacitance_refinements += (cap.stats.refinements - before.refinements) as usize;
-        out.capacitance_max_rank = out.capacitance_max_rank.max(cap.stats.max_rank);
-        out.solves += 1;
+        trial.out.capacitance.add(&cap.stats.since(&before));
+        trial.out.solves += 1;
         // the residual on the system of this pass's rows, as a fresh factor's
         let res = constrained_residual(&self.a_cur, &fixed, &presc, &rhs, &x);
         if res.is_nan() || res > RESIDUAL_TOLERANCE {

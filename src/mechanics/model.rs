@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8::FACES;
-use crate::fem::{ElementError, SolveError, SparseSym};
+use crate::fem::{CapacitanceStats, ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, CreepLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
@@ -115,22 +115,10 @@ pub struct MechStats {
     /// why the joint solves factorised
     #[serde(default)]
     pub refactor_reasons: RefactorCounts,
-    /// contact passes solved by the capacitance correction instead of a
-    /// factorisation
+    /// the capacitance corrections that replaced factorisations (their
+    /// time is part of `seconds_joints`)
     #[serde(default)]
-    pub capacitance_solves: usize,
-    /// right-hand sides of the step's factor those corrections took
-    #[serde(default)]
-    pub capacitance_columns: usize,
-    /// largest capacitance system [changed rows]
-    #[serde(default)]
-    pub capacitance_max_rank: usize,
-    /// refinements of corrected solutions on their residual
-    #[serde(default)]
-    pub capacitance_refinements: usize,
-    /// wall time of the corrections [s] (part of `seconds_joints`)
-    #[serde(default)]
-    pub seconds_capacitance: f64,
+    pub capacitance: CapacitanceStats,
 }
 
 /// Checkpointable mechanical state.
@@ -723,14 +711,7 @@ impl MechanicsModel {
         self.stats.kept_closed_tension =
             self.stats.kept_closed_tension.max(out.kept_closed_tension);
         self.stats.refactor_reasons.add(&out.refactor_reasons);
-        self.stats.capacitance_solves += out.capacitance_solves;
-        self.stats.capacitance_columns += out.capacitance_columns;
-        self.stats.seconds_capacitance += out.seconds_capacitance;
-        self.stats.capacitance_refinements += out.capacitance_refinements;
-        self.stats.capacitance_max_rank = self
-            .stats
-            .capacitance_max_rank
-            .max(out.capacitance_max_rank);
+        self.stats.capacitance.add(&out.capacitance);
         self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
         Ok(out.x)
     }

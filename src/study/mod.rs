@@ -365,11 +365,11 @@ fn print_mechanics(m: &MechStats) {
         r.grout,
         r.contact,
         r.rank,
-        m.capacitance_solves,
-        m.capacitance_refinements,
-        m.capacitance_columns,
-        m.capacitance_max_rank,
-        m.seconds_capacitance
+        m.capacitance.solves,
+        m.capacitance.refinements,
+        m.capacitance.columns,
+        m.capacitance.max_rank,
+        m.capacitance.seconds
     );
 }
 

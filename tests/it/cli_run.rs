@@ -1,6 +1,6 @@
 //! The `groutready` binary as a site engineer runs it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::common::{bin, copy_dir, repo};
 
@@ -14,6 +14,34 @@ fn only(dir: &Path, keep: &[&str]) {
     let mut keep: Vec<String> = keep.iter().map(|s| s.to_string()).collect();
     keep.sort();
     assert_eq!(names, keep, "unexpected files in {}", dir.display());
+}
+
+/// `models/<model>.toml` written into `dir` as `scene.toml` with `edit`
+/// applied and its schedules folder made absolute; returns its path.
+fn edited_scene(dir: &Path, model: &str, edit: impl FnOnce(String) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(repo(&format!("models/{model}.toml")))
+        .unwrap()
+        .replace(
+            &format!("../schedules/{model}"),
+            &repo(&format!("schedules/{model}")).display().to_string(),
+        );
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, edit(text)).unwrap();
+    scene
+}
+
+/// `groutready run SCENE --out DIR/out`, which must fail with exit code 1;
+/// returns its standard error.
+fn refused_run(scene: &Path, dir: &Path) -> String {
+    let o = bin()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// The quick scene with thermal, mechanics and joints (the demo itself runs
@@ -144,26 +172,14 @@ fn bad_schedule_is_reported_with_file_line_column_and_nothing_is_written() {
 #[test]
 fn bad_scene_names_the_key_and_writes_nothing() {
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(repo("models/two_blocks.toml"))
-        .unwrap()
-        .replace("conductivity_w_mk = 2.2", "conductivity_w_mk = -2.2")
-        .replace(
-            "../schedules/two_blocks",
-            &repo("schedules/two_blocks").display().to_string(),
+    let scene = edited_scene(tmp.path(), "two_blocks", |text| {
+        assert!(
+            text.contains("conductivity_w_mk = 2.2"),
+            "fixture changed: update the test"
         );
-    assert!(text.contains("-2.2"), "fixture changed: update the test");
-    let scene = tmp.path().join("scene.toml");
-    std::fs::write(&scene, text).unwrap();
-    let out = tmp.path().join("out");
-    let o = bin()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
+        text.replace("conductivity_w_mk = 2.2", "conductivity_w_mk = -2.2")
+    });
+    let err = refused_run(&scene, tmp.path());
     assert!(
         err.contains("concrete.conductivity_w_mk must be > 0, got -2.2"),
         "{err}"
@@ -177,7 +193,6 @@ fn bad_scene_names_the_key_and_writes_nothing() {
 #[test]
 fn a_pour_before_the_epoch_is_refused_before_the_run() {
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(repo("models/two_blocks.toml")).unwrap();
     let first_pour = std::fs::read_to_string(repo("schedules/two_blocks/pours.csv"))
         .unwrap()
         .lines()
@@ -187,28 +202,15 @@ fn a_pour_before_the_epoch_is_refused_before_the_run() {
     // the epoch a day after the first pour
     let day_after = chrono::NaiveDate::parse_from_str(&first_pour, "%Y-%m-%d").unwrap()
         + chrono::Duration::days(1);
-    let epoch_line = text
-        .lines()
-        .find(|l| l.starts_with("epoch"))
-        .unwrap()
-        .to_string();
-    let text = text
-        .replace(&epoch_line, &format!("epoch = {day_after}"))
-        .replace(
-            "../schedules/two_blocks",
-            &repo("schedules/two_blocks").display().to_string(),
-        );
-    let scene = tmp.path().join("scene.toml");
-    std::fs::write(&scene, text).unwrap();
-    let o = bin()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(tmp.path().join("out"))
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
+    let scene = edited_scene(tmp.path(), "two_blocks", |text| {
+        let epoch_line = text
+            .lines()
+            .find(|l| l.starts_with("epoch"))
+            .unwrap()
+            .to_string();
+        text.replace(&epoch_line, &format!("epoch = {day_after}"))
+    });
+    let err = refused_run(&scene, tmp.path());
     assert!(
         err.contains(&format!(
             "pours.csv:2:3 (pour_date): expected a date on or after the scene's epoch {day_after}, found \"{first_pour}\""
@@ -223,29 +225,17 @@ fn a_pour_before_the_epoch_is_refused_before_the_run() {
 #[test]
 fn a_mesh_beyond_the_machine_is_refused_at_once() {
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(repo("models/demo_arch.toml")).unwrap();
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("elements_per_block"))
-        .unwrap()
-        .to_string();
-    let text = text.replace(&line, "elements_per_block = 100000").replace(
-        "../schedules/demo_arch",
-        &repo("schedules/demo_arch").display().to_string(),
-    );
-    let scene = tmp.path().join("scene.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = edited_scene(tmp.path(), "demo_arch", |text| {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("elements_per_block"))
+            .unwrap()
+            .to_string();
+        text.replace(&line, "elements_per_block = 100000")
+    });
     let t = std::time::Instant::now();
-    let o = bin()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(tmp.path().join("out"))
-        .output()
-        .unwrap();
+    let err = refused_run(&scene, tmp.path());
     let seconds = t.elapsed().as_secs_f64();
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("mesh too large for this machine: "), "{err}");
     assert!(err.contains("GiB, the machine has "), "{err}");
     eprintln!("refused in {seconds:.3} s: {err}");

@@ -93,8 +93,8 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
          {differ} states differ; factorisations {} ({} capacitance solves, largest rank {}) against {} (exact)",
         1e3 * largest,
         fast_stats.numeric,
-        fast_stats.capacitance_solves,
-        fast_stats.capacitance_max_rank,
+        fast_stats.capacitance.solves,
+        fast_stats.capacitance.max_rank,
         exact_stats.numeric
     );
     assert!(compared >= 4 * dates.len(), "every zone is read");
@@ -104,12 +104,12 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
         1e3 * largest
     );
     assert_eq!(differ, 0);
-    assert_eq!(exact_stats.capacitance_solves, 0);
+    assert_eq!(exact_stats.capacitance.solves, 0);
     assert!(
         exact_stats.refactor_reasons.contact > 0,
         "the contact set changes within steps"
     );
-    assert!(fast_stats.capacitance_solves > 0);
+    assert!(fast_stats.capacitance.solves > 0);
     assert!(
         fast_stats.numeric < exact_stats.numeric,
         "the correction replaces factorisations"
