@@ -173,6 +173,7 @@ pub fn plan(
         zones,
         histories,
         meters,
+        warnings: Vec::new(),
         stats: PlanStats {
             baseline_seconds,
             restarted_from,

@@ -263,6 +263,9 @@ pub struct Plan {
     pub histories: Vec<ZoneHistory>,
     pub meters: Vec<MeterComparison>,
     pub stats: PlanStats,
+    /// inputs the plan accepted but that look wrong (the report repeats them)
+    #[serde(default)]
+    pub warnings: Vec<crate::schedule::Warning>,
 }
 
 impl Plan {

@@ -72,6 +72,7 @@ mod error;
 mod layout;
 mod read;
 mod synth;
+mod warning;
 mod write;
 
 use std::fmt;
@@ -87,6 +88,7 @@ pub use check::{
 pub use error::ScheduleError;
 pub use layout::{check_against, DamLayout, ZoneExtent};
 pub use synth::{synthesize, SynthParams};
+pub use warning::Warning;
 pub use write::write_dir;
 
 /// File names inside a schedule folder.
