@@ -241,6 +241,7 @@ fn fixture() -> Plan {
             meter(3, 1, "upstream", "2024-07-10", 0.50, Some(0.60)),
             meter(3, 1, "upstream", "2024-08-10", 0.40, Some(0.30)),
         ],
+        warnings: vec![],
         stats: PlanStats {
             baseline_seconds: 120.5,
             restarted_from: Some(date("2024-08-15")),
