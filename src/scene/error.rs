@@ -38,11 +38,14 @@ pub enum SceneError {
         message: String,
     },
     /// A value that parsed but is out of range or inconsistent with another.
-    #[error("{}", fmt_invalid(origin.as_deref(), message))]
+    #[error("{}", fmt_invalid(origin.as_deref(), *position, message))]
     Invalid {
         /// File name; `None` when [`super::Scene::validate`] is called on a scene
         /// that did not come from a file.
         origin: Option<String>,
+        /// 1-based (line, column) of the key's value in the file (of the
+        /// nearest table that exists when the key itself is missing).
+        position: Option<(usize, usize)>,
         /// Dotted key of the offending value, e.g. `concrete.conductivity_w_mk`.
         key: String,
         /// Full message, starting with the key.
@@ -57,10 +60,11 @@ fn fmt_parse(origin: &str, position: Option<(usize, usize)>, message: &str) -> S
     }
 }
 
-fn fmt_invalid(origin: Option<&str>, message: &str) -> String {
-    match origin {
-        Some(o) => format!("{o}: {message}"),
-        None => message.to_string(),
+fn fmt_invalid(origin: Option<&str>, position: Option<(usize, usize)>, message: &str) -> String {
+    match (origin, position) {
+        (Some(o), Some((line, col))) => format!("{o}:{line}:{col}: {message}"),
+        (Some(o), None) => format!("{o}: {message}"),
+        (None, _) => message.to_string(),
     }
 }
 
@@ -69,6 +73,7 @@ impl SceneError {
     pub(crate) fn invalid(key: impl Into<String>, message: impl fmt::Display) -> SceneError {
         SceneError::Invalid {
             origin: None,
+            position: None,
             key: key.into(),
             message: message.to_string(),
         }
@@ -79,10 +84,31 @@ impl SceneError {
         match self {
             SceneError::Invalid {
                 origin: None,
+                position,
                 key,
                 message,
             } => SceneError::Invalid {
                 origin: Some(name.to_string()),
+                position,
+                key,
+                message,
+            },
+            other => other,
+        }
+    }
+
+    /// Attach the line and column of the key a validation error is about,
+    /// found in the scene's `text`.
+    pub(crate) fn located(self, text: &str) -> SceneError {
+        match self {
+            SceneError::Invalid {
+                origin,
+                position: None,
+                key,
+                message,
+            } => SceneError::Invalid {
+                origin,
+                position: key_offset(text, &key).map(|at| line_col(text, at)),
                 key,
                 message,
             },
@@ -254,6 +280,30 @@ fn locate_in(table: &DeTable<'_>, span: &Range<usize>, path: &mut Vec<String>) -
         path.pop();
     }
     None
+}
+
+/// Byte offset of the dotted `key` (`concrete.conductivity_w_mk`,
+/// `output.snapshots[2]`) in the scene text: its value when it is a plain
+/// value, its name when it is a table, the nearest existing table's name
+/// when it is missing.
+fn key_offset(text: &str, key: &str) -> Option<usize> {
+    let doc = DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    let mut found = None;
+    for name in key.split('.') {
+        let name = name.split('[').next().unwrap_or(name);
+        let (Some(value), Some(span)) = (entry(table, name), key_span(table, name)) else {
+            break;
+        };
+        match value.get_ref() {
+            DeValue::Table(inner) => {
+                found = Some(span.start);
+                table = inner;
+            }
+            _ => return Some(value.span().start),
+        }
+    }
+    found
 }
 
 fn table_at<'a, 'i>(root: &'a DeTable<'i>, path: &[String]) -> Option<&'a DeTable<'i>> {

@@ -544,7 +544,9 @@ impl Scene {
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
         let scene: Scene =
             toml::from_str(text).map_err(|e| error::from_toml_error(text, origin, e))?;
-        scene.validate().map_err(|e| e.with_origin(origin))?;
+        scene
+            .validate()
+            .map_err(|e| e.with_origin(origin).located(text))?;
         Ok(scene)
     }
 

@@ -197,6 +197,7 @@ pub(crate) fn check_pours(pours: &[Pour]) -> Result<(), ScheduleError> {
             return Err(ScheduleError::row(
                 POURS_CSV,
                 p.line,
+                1,
                 format!(
                     "duplicate row: block {} lift {} is already on line {}",
                     p.block, p.lift, first.line
@@ -210,6 +211,7 @@ pub(crate) fn check_pours(pours: &[Pour]) -> Result<(), ScheduleError> {
             return Err(ScheduleError::row(
                 POURS_CSV,
                 p.line,
+                2,
                 format!(
                     "block {} lift {} has no lift {} below it (lifts are numbered 1, 2, 3, ... without gaps)",
                     p.block,
@@ -227,6 +229,7 @@ pub(crate) fn check_pours(pours: &[Pour]) -> Result<(), ScheduleError> {
             return Err(ScheduleError::row(
                 POURS_CSV,
                 p.line,
+                3,
                 format!(
                     "block {} lift {} poured {}, before lift {} (line {}) poured {}",
                     p.block, p.lift, p.date, below.lift, below.line, below.date
@@ -237,6 +240,7 @@ pub(crate) fn check_pours(pours: &[Pour]) -> Result<(), ScheduleError> {
             return Err(ScheduleError::row(
                 POURS_CSV,
                 p.line,
+                3,
                 format!(
                     "block {} lift {} poured {}, the same day as lift {} (line {}); a lift must be poured after the lift below it",
                     p.block, p.lift, p.date, below.lift, below.line
@@ -266,6 +270,7 @@ pub(crate) fn check_cooling(cooling: &[CoolingStage], pours: &[Pour]) -> Result<
                     return Err(ScheduleError::row(
                         COOLING_CSV,
                         c.line,
+                        if lift == c.lift_from { 2 } else { 3 },
                         format!("{what}, but lift {lift} is not in {POURS_CSV}"),
                     ))
                 }
@@ -273,6 +278,7 @@ pub(crate) fn check_cooling(cooling: &[CoolingStage], pours: &[Pour]) -> Result<
                     return Err(ScheduleError::row(
                         COOLING_CSV,
                         c.line,
+                        5,
                         format!(
                             "{what}, before lift {lift} is poured {} ({POURS_CSV}:{})",
                             p.date, p.line
@@ -313,7 +319,7 @@ pub(crate) fn check_cooling(cooling: &[CoolingStage], pours: &[Pour]) -> Result<
             };
             if let Some(message) = message {
                 if worst.as_ref().is_none_or(|(line, _)| b.line < *line) {
-                    worst = Some((b.line, ScheduleError::row(COOLING_CSV, b.line, message)));
+                    worst = Some((b.line, ScheduleError::row(COOLING_CSV, b.line, 5, message)));
                 }
             }
         }
@@ -331,6 +337,7 @@ pub(crate) fn check_grouting(grouting: &[GroutingPlan]) -> Result<(), ScheduleEr
             return Err(ScheduleError::row(
                 GROUTING_CSV,
                 g.line,
+                1,
                 format!(
                     "duplicate row: joint {} zone {} is already on line {first}",
                     g.joint, g.zone
@@ -352,6 +359,7 @@ pub(crate) fn check_series(
             return Err(ScheduleError::row(
                 file,
                 line,
+                1,
                 format!("duplicate date {date}, already on line {first}"),
             ));
         }
@@ -363,6 +371,7 @@ pub(crate) fn check_series(
                 return Err(ScheduleError::row(
                     file,
                     line,
+                    1,
                     format!(
                         "date {date} is before the previous date {pdate} (line {pline}); dates must increase"
                     ),
@@ -381,6 +390,7 @@ pub(crate) fn check_meters(meters: &[JointMeter]) -> Result<(), ScheduleError> {
             return Err(ScheduleError::row(
                 JOINT_METERS_CSV,
                 m.line,
+                1,
                 format!(
                     "duplicate row: joint {} zone {} point {} on {} is already on line {first}",
                     m.joint, m.zone, m.point, m.date

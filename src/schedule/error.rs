@@ -3,11 +3,14 @@
 
 use std::path::PathBuf;
 
+/// The longest text an error quotes.
+pub(crate) const EXCERPT_CHARS: usize = 120;
+
 /// An error in a schedule folder or in its agreement with the dam layout.
 ///
 /// Display forms (the text found is quoted with Rust string escapes):
 /// - cell: `pours.csv:12:3 (pour_date): expected a date YYYY-MM-DD, found "2025-13-01"`
-/// - row / between rows: `pours.csv:14: block 3 lift 5 poured 2025-03-02, before lift 4 (line 13) poured 2025-03-09`
+/// - row / between rows: `pours.csv:14:3: block 3 lift 5 poured 2025-03-02, before lift 4 (line 13) poured 2025-03-09`
 /// - header: `pours.csv:1: expected header "block,lift,pour_date,placement_temp_c", found "block,lift,pour_date" (missing column "placement_temp_c")`
 /// - field count: `pours.csv:7: expected 4 fields (block,lift,pour_date,placement_temp_c), found 3 in "1,2,2025-01-01"`
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -59,18 +62,22 @@ pub enum ScheduleError {
 
     /// A row contradicts another row (or another file): duplicates, order,
     /// gaps, overlaps, cooling before pouring.
-    #[error("{file}:{line}: {message}")]
+    #[error("{file}:{line}:{column}: {message}")]
     Row {
         file: String,
         line: usize,
+        /// 1-based column of the cell the conflict is about
+        column: usize,
         message: String,
     },
 
     /// A row contradicts the dam layout ([`super::check_against`]).
-    #[error("{file}:{line}: {message}")]
+    #[error("{file}:{line}:{column}: {message}")]
     Layout {
         file: String,
         line: usize,
+        /// 1-based column of the cell the conflict is about
+        column: usize,
         message: String,
     },
 
@@ -107,18 +114,35 @@ impl ScheduleError {
         }
     }
 
-    pub(crate) fn row(file: &str, line: usize, message: impl Into<String>) -> Self {
+    /// At most [`EXCERPT_CHARS`] characters of `text`, ending with `…` when
+    /// cut: an error quotes what it found, not a 10 MB line.
+    pub(crate) fn excerpt(text: &str) -> String {
+        if text.chars().count() <= EXCERPT_CHARS {
+            return text.to_string();
+        }
+        let cut: String = text.chars().take(EXCERPT_CHARS).collect();
+        format!("{cut}… ({} characters)", text.chars().count())
+    }
+
+    pub(crate) fn row(file: &str, line: usize, column: usize, message: impl Into<String>) -> Self {
         ScheduleError::Row {
             file: file.to_string(),
             line,
+            column,
             message: message.into(),
         }
     }
 
-    pub(crate) fn layout(file: &str, line: usize, message: impl Into<String>) -> Self {
+    pub(crate) fn layout(
+        file: &str,
+        line: usize,
+        column: usize,
+        message: impl Into<String>,
+    ) -> Self {
         ScheduleError::Layout {
             file: file.to_string(),
             line,
+            column,
             message: message.into(),
         }
     }

@@ -149,9 +149,11 @@ fn block_label(layout_blocks: &BTreeMap<u32, u32>) -> String {
 }
 
 /// Checks that `block` exists and `lift_to` is not above its top.
+/// `lift_col` is the 1-based column of `lift_to` (the block is column 1).
 fn check_block_lifts(
     file: &str,
     line: usize,
+    lift_col: usize,
     blocks: &BTreeMap<u32, u32>,
     block: u32,
     lift_from: u32,
@@ -161,6 +163,7 @@ fn check_block_lifts(
         return Err(ScheduleError::layout(
             file,
             line,
+            1,
             format!("block {block} is not in the dam ({})", block_label(blocks)),
         ));
     };
@@ -173,7 +176,7 @@ fn check_block_lifts(
                 "block {block} {lifts}: lift {lift_to} is above the top of the block (lift {n})"
             )
         };
-        return Err(ScheduleError::layout(file, line, message));
+        return Err(ScheduleError::layout(file, line, lift_col, message));
     }
     Ok(())
 }
@@ -196,6 +199,7 @@ fn check_joint_zone(
         return Err(ScheduleError::layout(
             file,
             line,
+            1,
             format!("joint {joint} does not exist ({known})"),
         ));
     }
@@ -214,7 +218,7 @@ fn check_joint_zone(
         }
         _ => format!("joint {joint} has no zone {zone} (it has {list})"),
     };
-    Err(ScheduleError::layout(file, line, message))
+    Err(ScheduleError::layout(file, line, 2, message))
 }
 
 /// Checks a schedule against the dam: unknown blocks, lifts above a block's
@@ -228,12 +232,13 @@ pub fn check_against(s: &Schedules, layout: &DamLayout) -> Result<(), ScheduleEr
     layout.validate()?;
     let blocks: BTreeMap<u32, u32> = layout.blocks.iter().copied().collect();
     for p in &s.pours {
-        check_block_lifts(POURS_CSV, p.line, &blocks, p.block, p.lift, p.lift)?;
+        check_block_lifts(POURS_CSV, p.line, 2, &blocks, p.block, p.lift, p.lift)?;
     }
     for c in &s.cooling {
         check_block_lifts(
             COOLING_CSV,
             c.line,
+            3,
             &blocks,
             c.block,
             c.lift_from,
@@ -261,6 +266,7 @@ pub fn check_against(s: &Schedules, layout: &DamLayout) -> Result<(), ScheduleEr
                         return Err(ScheduleError::layout(
                             GROUTING_CSV,
                             g.line,
+                            3,
                             format!("{what}: block {block} lift {lift} is not in {POURS_CSV}"),
                         ))
                     }
@@ -277,6 +283,7 @@ pub fn check_against(s: &Schedules, layout: &DamLayout) -> Result<(), ScheduleEr
                 return Err(ScheduleError::layout(
                     GROUTING_CSV,
                     g.line,
+                    3,
                     format!(
                         "{what}: block {} lift {} is poured {} ({POURS_CSV}:{})",
                         p.block, p.lift, p.date, p.line

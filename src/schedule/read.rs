@@ -69,13 +69,17 @@ pub(crate) fn read_table_alt(
     let text = match std::str::from_utf8(&bytes) {
         Ok(t) => t,
         Err(e) => {
-            let line = 1 + bytes[..e.valid_up_to()]
-                .iter()
-                .filter(|&&b| b == b'\n')
+            let valid = &bytes[..e.valid_up_to()];
+            let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+            let line_start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            // Column in characters: the bytes before the bad one are UTF-8.
+            let column = 1 + String::from_utf8_lossy(&valid[line_start..])
+                .chars()
                 .count();
             return Err(ScheduleError::row(
                 file,
                 line,
+                column,
                 "expected UTF-8 text (save the file as CSV UTF-8)",
             ));
         }
@@ -119,6 +123,7 @@ fn parse_table_alt(
                 return Err(ScheduleError::row(
                     file,
                     line,
+                    1,
                     format!("expected a CSV record ({e})"),
                 ));
             }
@@ -148,7 +153,7 @@ fn parse_table_alt(
                 expected: header.len(),
                 found: fields.len(),
                 header: header.join(","),
-                text: fields.join(","),
+                text: ScheduleError::excerpt(&fields.join(",")),
             });
         }
         rows.push(RawRow { line, fields });
@@ -205,11 +210,19 @@ fn check_header(
     let unexpected: Vec<String> = fields
         .iter()
         .filter(|f| !header.iter().any(|h| f.eq_ignore_ascii_case(h)))
-        .map(|f| format!("{f:?}"))
+        .map(|f| format!("{:?}", ScheduleError::excerpt(f)))
         .collect();
     if !unexpected.is_empty() {
         let s = if unexpected.len() > 1 { "s" } else { "" };
-        notes.push(format!("unexpected column{s} {}", unexpected.join(", ")));
+        let shown = unexpected.len().min(UNEXPECTED_SHOWN);
+        let more = match unexpected.len() - shown {
+            0 => String::new(),
+            n => format!(" and {n} more"),
+        };
+        notes.push(format!(
+            "unexpected column{s} {}{more}",
+            unexpected[..shown].join(", ")
+        ));
     }
     if notes.is_empty() {
         if fields.len() != header.len() {
@@ -222,7 +235,7 @@ fn check_header(
         file: file.to_string(),
         line,
         expected: header.join(","),
-        found: fields.join(","),
+        found: ScheduleError::excerpt(&fields.join(",")),
         detail: format!(" ({})", notes.join("; ")),
     })
 }
@@ -299,6 +312,9 @@ impl<'a> Cells<'a> {
     }
 }
 
+/// Unexpected header columns named in an error; the rest are counted.
+const UNEXPECTED_SHOWN: usize = 5;
+
 pub(crate) const EXPECTED_ID: &str = "expected a whole number ≥ 1";
 pub(crate) const EXPECTED_DATE: &str = "expected a date YYYY-MM-DD";
 
@@ -316,7 +332,7 @@ pub(crate) fn cell_error(
         column: col + 1,
         name: header.get(col).copied().unwrap_or("?").to_string(),
         expected: expected.into(),
-        found: found.to_string(),
+        found: ScheduleError::excerpt(found),
     }
 }
 

@@ -174,19 +174,19 @@ fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
         ),
         (
             Line("pours.csv", 7, "3,2,2024-01-30,17.7"),
-            "pours.csv:7: block 3 lift 2 poured 2024-01-30, before lift 1 (line 2) poured 2024-01-31",
+            "pours.csv:7:3: block 3 lift 2 poured 2024-01-30, before lift 1 (line 2) poured 2024-01-31",
         ),
-        (Append("pours.csv", "9,1,2024-03-01,15"), "pours.csv:102: block 9 is not in the dam (blocks 1-5)"),
+        (Append("pours.csv", "9,1,2024-03-01,15"), "pours.csv:102:1: block 9 is not in the dam (blocks 1-5)"),
         (
             Line("cooling.csv", 2, "3,1,1,third,2024-01-31,2024-02-21,10,20"),
             "cooling.csv:2:4 (stage): expected one of first, middle, second, extra, found \"third\"",
         ),
-        (Line("cooling.csv", 2, "3,1,1,first,2024-01-20,2024-02-21,10,20"), "cooling.csv:2: block 3 lift 1: stage first starts 2024-01-20, before lift 1 is poured 2024-01-31 (pours.csv:2)"),
+        (Line("cooling.csv", 2, "3,1,1,first,2024-01-20,2024-02-21,10,20"), "cooling.csv:2:5: block 3 lift 1: stage first starts 2024-01-20, before lift 1 is poured 2024-01-31 (pours.csv:2)"),
         (Line("cooling.csv", 2, "3,1,1,first,2024-01-31,2024-02-21,10,8"), "cooling.csv:2:8 (target_temp_c): expected a target temperature above water_temp_c 10 °C, found \"8\""),
-        (Line("grouting.csv", 2, "2,1,2024-01-15"), "grouting.csv:2: joint 2 zone 1 planned 2024-01-15, before the zone exists: block 2 lift 3 is poured 2024-02-26 (pours.csv:13)"),
-        (Append("grouting.csv", "2,9,2025-06-01"), "grouting.csv:30: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)"),
-        (Append("grouting.csv", "7,1,2024-06-01"), "grouting.csv:30: joint 7 does not exist (joints 1-4)"),
-        (Append("grouting.csv", "2,1,2024-05-27"), "grouting.csv:30: duplicate row: joint 2 zone 1 is already on line 2"),
+        (Line("grouting.csv", 2, "2,1,2024-01-15"), "grouting.csv:2:3: joint 2 zone 1 planned 2024-01-15, before the zone exists: block 2 lift 3 is poured 2024-02-26 (pours.csv:13)"),
+        (Append("grouting.csv", "2,9,2025-06-01"), "grouting.csv:30:2: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)"),
+        (Append("grouting.csv", "7,1,2024-06-01"), "grouting.csv:30:1: joint 7 does not exist (joints 1-4)"),
+        (Append("grouting.csv", "2,1,2024-05-27"), "grouting.csv:30:1: duplicate row: joint 2 zone 1 is already on line 2"),
         (Line("grouting.csv", 1, "joint,zone,planed_date"), "grouting.csv:1: expected header \"joint,zone,planned_date\", found \"joint,zone,planed_date\" (missing column \"planned_date\"; unexpected column \"planed_date\")"),
         (
             Write("grouting.csv", "joint,zone,planned_date,status\n2,1,2024-05-26,finished\n"),
@@ -195,7 +195,7 @@ fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
         (Line("reservoir.csv", 2, "2024-09-13,high"), "reservoir.csv:2:2 (level_m): expected a number (m), found \"high\""),
         (
             Write("joint_meters.csv", "joint,zone,point,date,aperture_mm\n2,9,center,2024-06-01,0.6\n"),
-            "joint_meters.csv:2: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)",
+            "joint_meters.csv:2:2: joint 2 zone 9 is above the dam (joint 2 has zones 1-7)",
         ),
         (
             Write("joint_meters.csv", "joint,zone,point,date,aperture_mm\n2,1,middle,2024-06-01,0.6\n"),

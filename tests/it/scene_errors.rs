@@ -160,7 +160,7 @@ fn negative_conductivity() {
     let text = replaced(BASE, "conductivity_w_mk = 2.2", "conductivity_w_mk = -2.1");
     assert_eq!(
         err(&text),
-        "models/x.toml: concrete.conductivity_w_mk must be > 0, got -2.1"
+        "models/x.toml:23:21: concrete.conductivity_w_mk must be > 0, got -2.1"
     );
 }
 
@@ -169,7 +169,7 @@ fn zero_density() {
     let text = replaced(BASE, "density_kg_m3 = 2400.0", "density_kg_m3 = 0.0");
     assert_eq!(
         err(&text),
-        "models/x.toml: concrete.density_kg_m3 must be > 0, got 0"
+        "models/x.toml:21:17: concrete.density_kg_m3 must be > 0, got 0"
     );
 }
 
@@ -178,7 +178,7 @@ fn zone_not_whole_lifts() {
     let text = replaced(BASE, "zone_height_m = 9.0", "zone_height_m = 10");
     assert_eq!(
         err(&text),
-        "models/x.toml: joints.zone_height_m = 10 is not a whole number of lifts (lifts.height_m = 3)"
+        "models/x.toml:18:17: joints.zone_height_m = 10 is not a whole number of lifts (lifts.height_m = 3)"
     );
 }
 
@@ -191,7 +191,7 @@ fn hydration_without_adiabatic() {
     );
     assert_eq!(
         err(&text),
-        "models/x.toml: effect `hydration` needs a [concrete.adiabatic] table, which is missing"
+        "models/x.toml:20:2: effect `hydration` needs a [concrete.adiabatic] table, which is missing"
     );
 }
 
@@ -211,7 +211,7 @@ fn inner_radius_not_below_outer() {
     let text = replaced(BASE, "inner_radius_m = 0.014", "inner_radius_m = 0.016");
     assert_eq!(
         err(&text),
-        "models/x.toml: pipes.inner_radius_m = 0.016 must be < pipes.outer_radius_m = 0.016"
+        "models/x.toml:36:18: pipes.inner_radius_m = 0.016 must be < pipes.outer_radius_m = 0.016"
     );
 }
 
@@ -220,7 +220,7 @@ fn theta_out_of_range() {
     let text = format!("{BASE}\n[time]\ntheta = 0.4\n");
     assert_eq!(
         err(&text),
-        "models/x.toml: time.theta must be in [0.5, 1], got 0.4"
+        "models/x.toml:46:9: time.theta must be in [0.5, 1], got 0.4"
     );
 }
 
@@ -230,7 +230,7 @@ fn mechanics_step_out_of_range() {
         let text = format!("{BASE}\n[time]\nmechanics_max_step_days = {bad}\n");
         assert_eq!(
             err(&text),
-            format!("models/x.toml: time.mechanics_max_step_days must be a whole number of days in 1..=30, got {bad}")
+            format!("models/x.toml:46:27: time.mechanics_max_step_days must be a whole number of days in 1..=30, got {bad}")
         );
     }
     let text = format!("{BASE}\n[time]\nmechanics_max_step_days = 2.5\n");
@@ -264,7 +264,7 @@ fn arch_base_radius_above_crest() {
     let text = replaced(ARCH, "base_radius_m = 60.0", "base_radius_m = 120.0");
     assert_eq!(
         err(&text),
-        "models/x.toml: geometry.base_radius_m = 120 must be <= geometry.crest_radius_m = 100"
+        "models/x.toml:10:17: geometry.base_radius_m = 120 must be <= geometry.crest_radius_m = 100"
     );
 }
 
@@ -273,7 +273,7 @@ fn duplicate_effect() {
     let text = replaced(BASE, "\"ambient\"]", "\"ambient\", \"hydration\"]");
     assert_eq!(
         err(&text),
-        "models/x.toml: effects lists `hydration` more than once"
+        "models/x.toml:3:11: effects lists `hydration` more than once"
     );
 }
 
@@ -331,7 +331,7 @@ fn snapshot_before_epoch() {
     let text = format!("{BASE}\n[output]\nsnapshots = [2024-06-01, 2023-12-31]\n");
     assert_eq!(
         err(&text),
-        "models/x.toml: output.snapshots: 2023-12-31 is before epoch 2024-01-01"
+        "models/x.toml:46:13: output.snapshots: 2023-12-31 is before epoch 2024-01-01"
     );
 }
 
@@ -340,7 +340,7 @@ fn arch_height_not_whole_lifts() {
     let text = replaced(ARCH, "height_m = 30.0", "height_m = 31.0");
     assert_eq!(
         err(&text),
-        "models/x.toml: geometry.height_m = 31 is not a whole number of lifts (lifts.height_m = 3)"
+        "models/x.toml:8:12: geometry.height_m = 31 is not a whole number of lifts (lifts.height_m = 3)"
     );
 }
 
@@ -400,7 +400,7 @@ fn mechanical_effect_without_modulus() {
     );
     assert_eq!(
         err(&text),
-        "models/x.toml: effect `self_weight` needs concrete.modulus, which is missing"
+        "models/x.toml:20:2: effect `self_weight` needs concrete.modulus, which is missing"
     );
 }
 
@@ -417,7 +417,7 @@ fn thermal_strain_without_expansion() {
     );
     assert_eq!(
         err(&text),
-        "models/x.toml: effect `thermal_strain` needs concrete.expansion_per_c, which is missing"
+        "models/x.toml:20:2: effect `thermal_strain` needs concrete.expansion_per_c, which is missing"
     );
 }
 
@@ -434,6 +434,6 @@ fn poisson_ratio_out_of_range() {
     );
     assert_eq!(
         err(&text),
-        "models/x.toml: concrete.poisson must be in [0, 0.5), got 0.5"
+        "models/x.toml:25:11: concrete.poisson must be in [0, 0.5), got 0.5"
     );
 }

@@ -310,7 +310,7 @@ fn lift_poured_before_lift_below() {
     let dir = with_line("pours.csv", "1,7,2025-02-10,14");
     assert_eq!(
         load_err(&dir),
-        "pours.csv:20: block 1 lift 7 poured 2025-02-10, before lift 6 (line 13) poured 2025-02-16"
+        "pours.csv:20:3: block 1 lift 7 poured 2025-02-10, before lift 6 (line 13) poured 2025-02-16"
     );
 }
 
@@ -319,7 +319,7 @@ fn lift_poured_same_day_as_lift_below() {
     let dir = with_line("pours.csv", "1,7,2025-02-16,14");
     assert_eq!(
         load_err(&dir),
-        "pours.csv:20: block 1 lift 7 poured 2025-02-16, the same day as lift 6 (line 13); a lift must be poured after the lift below it"
+        "pours.csv:20:3: block 1 lift 7 poured 2025-02-16, the same day as lift 6 (line 13); a lift must be poured after the lift below it"
     );
 }
 
@@ -328,7 +328,7 @@ fn duplicate_pour() {
     let dir = with_line("pours.csv", "1,3,2025-01-23,14");
     assert_eq!(
         load_err(&dir),
-        "pours.csv:20: duplicate row: block 1 lift 3 is already on line 10"
+        "pours.csv:20:1: duplicate row: block 1 lift 3 is already on line 10"
     );
 }
 
@@ -337,7 +337,7 @@ fn lift_gap() {
     let dir = with_line("pours.csv", "1,8,2025-03-01,14");
     assert_eq!(
         load_err(&dir),
-        "pours.csv:20: block 1 lift 8 has no lift 7 below it (lifts are numbered 1, 2, 3, ... without gaps)"
+        "pours.csv:20:2: block 1 lift 8 has no lift 7 below it (lifts are numbered 1, 2, 3, ... without gaps)"
     );
 }
 
@@ -346,7 +346,7 @@ fn duplicate_grouting() {
     let dir = with_line("grouting.csv", "1,1,2025-05-01");
     assert_eq!(
         load_err(&dir),
-        "grouting.csv:5: duplicate row: joint 1 zone 1 is already on line 2"
+        "grouting.csv:5:1: duplicate row: joint 1 zone 1 is already on line 2"
     );
 }
 
@@ -355,7 +355,7 @@ fn cooling_before_pour() {
     let dir = with_line("cooling.csv", "3,1,2,first,2025-01-10,2025-01-30,10,20");
     assert_eq!(
         load_err(&dir),
-        "cooling.csv:8: block 3 lifts 1-2: stage first starts 2025-01-10, before lift 2 is poured 2025-01-15 (pours.csv:15)"
+        "cooling.csv:8:5: block 3 lifts 1-2: stage first starts 2025-01-10, before lift 2 is poured 2025-01-15 (pours.csv:15)"
     );
 }
 
@@ -364,7 +364,7 @@ fn cooling_of_unpoured_lift() {
     let dir = with_line("cooling.csv", "3,6,7,extra,2025-04-01,2025-04-10,10,");
     assert_eq!(
         load_err(&dir),
-        "cooling.csv:8: block 3 lifts 6-7: stage extra starts 2025-04-01, but lift 7 is not in pours.csv"
+        "cooling.csv:8:3: block 3 lifts 6-7: stage extra starts 2025-04-01, but lift 7 is not in pours.csv"
     );
 }
 
@@ -373,7 +373,7 @@ fn overlapping_stages() {
     let dir = with_line("cooling.csv", "1,3,4,extra,2025-04-01,2025-04-20,10,");
     assert_eq!(
         load_err(&dir),
-        "cooling.csv:8: block 1 lift 3: stage extra from 2025-04-01 overlaps stage second from 2025-03-01 to 2025-04-15 (line 5)"
+        "cooling.csv:8:5: block 1 lift 3: stage extra from 2025-04-01 overlaps stage second from 2025-03-01 to 2025-04-15 (line 5)"
     );
 }
 
@@ -382,7 +382,7 @@ fn stages_starting_the_same_day() {
     let dir = with_line("cooling.csv", "2,2,2,extra,2025-01-13,2025-01-20,10,");
     assert_eq!(
         load_err(&dir),
-        "cooling.csv:8: block 2 lift 2: stage extra from 2025-01-13 starts on the same day as stage first (line 3)"
+        "cooling.csv:8:5: block 2 lift 2: stage extra from 2025-01-13 starts on the same day as stage first (line 3)"
     );
 }
 
@@ -391,7 +391,7 @@ fn weather_dates_not_increasing() {
     let dir = with_line("weather.csv", "2025-01-05,3");
     assert_eq!(
         load_err(&dir),
-        "weather.csv:5: date 2025-01-05 is before the previous date 2025-01-10 (line 4); dates must increase"
+        "weather.csv:5:1: date 2025-01-05 is before the previous date 2025-01-10 (line 4); dates must increase"
     );
 }
 
@@ -400,7 +400,7 @@ fn weather_duplicate_date() {
     let dir = with_line("weather.csv", "2025-01-02,3");
     assert_eq!(
         load_err(&dir),
-        "weather.csv:5: duplicate date 2025-01-02, already on line 3"
+        "weather.csv:5:1: duplicate date 2025-01-02, already on line 3"
     );
 }
 
@@ -411,7 +411,7 @@ fn unknown_block() {
     let dir = with_line("pours.csv", "4,1,2025-03-01,14");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "pours.csv:20: block 4 is not in the dam (blocks 1-3)"
+        "pours.csv:20:1: block 4 is not in the dam (blocks 1-3)"
     );
 }
 
@@ -420,7 +420,7 @@ fn lift_above_block_top() {
     let dir = with_line("pours.csv", "1,7,2025-03-01,14");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "pours.csv:20: block 1 lift 7 is above the top of the block (lift 6)"
+        "pours.csv:20:2: block 1 lift 7 is above the top of the block (lift 6)"
     );
 }
 
@@ -429,7 +429,7 @@ fn grouting_before_zone_exists() {
     let dir = with_line("grouting.csv", "2,2,2025-02-10");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "grouting.csv:5: joint 2 zone 2 planned 2025-02-10, before the zone exists: block 3 lift 6 is poured 2025-02-16 (pours.csv:19)"
+        "grouting.csv:5:3: joint 2 zone 2 planned 2025-02-10, before the zone exists: block 3 lift 6 is poured 2025-02-16 (pours.csv:19)"
     );
 }
 
@@ -447,7 +447,7 @@ fn grouting_of_unpoured_zone() {
     let dir = with_line("grouting.csv", "2,3,2025-06-10");
     assert_eq!(
         layout_err(&dir, &l),
-        "grouting.csv:5: joint 2 zone 3 planned 2025-06-10, before the zone exists: block 2 lift 7 is not in pours.csv"
+        "grouting.csv:5:3: joint 2 zone 3 planned 2025-06-10, before the zone exists: block 2 lift 7 is not in pours.csv"
     );
 }
 
@@ -456,7 +456,7 @@ fn zone_above_the_dam() {
     let dir = with_line("grouting.csv", "2,3,2025-06-10");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "grouting.csv:5: joint 2 zone 3 is above the dam (joint 2 has zones 1-2)"
+        "grouting.csv:5:2: joint 2 zone 3 is above the dam (joint 2 has zones 1-2)"
     );
 }
 
@@ -468,7 +468,7 @@ fn zone_below_the_foundation() {
     let dir = copy_fixture();
     assert_eq!(
         layout_err(&dir, &l),
-        "grouting.csv:3: joint 2 zone 1 is below the foundation (joint 2 has zone 2)"
+        "grouting.csv:3:2: joint 2 zone 1 is below the foundation (joint 2 has zone 2)"
     );
 }
 
@@ -477,7 +477,7 @@ fn joint_does_not_exist() {
     let dir = with_line("grouting.csv", "3,1,2025-06-10");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "grouting.csv:5: joint 3 does not exist (joints 1-2)"
+        "grouting.csv:5:1: joint 3 does not exist (joints 1-2)"
     );
 }
 
@@ -486,7 +486,7 @@ fn meter_on_unknown_zone() {
     let dir = with_line("joint_meters.csv", "1,5,center,2025-03-01,0.5");
     assert_eq!(
         layout_err(&dir, &layout()),
-        "joint_meters.csv:5: joint 1 zone 5 is above the dam (joint 1 has zones 1-2)"
+        "joint_meters.csv:5:2: joint 1 zone 5 is above the dam (joint 1 has zones 1-2)"
     );
 }
 
