@@ -273,12 +273,14 @@ fn run(
         inputs.schedules.pours.len(),
         inputs.scene.effects
     );
+    print_warnings(&inputs.warnings);
     let bar = groutready::progress::bar("simulating");
     let summary = app::run(&inputs, &out, &mut |day, end| {
         groutready::progress::update(&bar, day, end)
     })
     .with_context(|| format!("running {}", scene.display()))?;
     bar.finish_and_clear();
+    print_warnings(&summary.stats.warnings);
     print!("{}", groutready::study::summary_line(&summary));
     println!("wrote {}", summary.out.display());
     Ok(0)
@@ -286,6 +288,13 @@ fn run(
 
 /// `groutready plan`: plan the zones, print the readiness table and what the
 /// run cost; exit [`EXIT_FLAGGED`] on request when a zone is not groutable.
+/// Warnings on the inputs, before the long run (the report repeats them).
+fn print_warnings(warnings: &[groutready::schedule::Warning]) {
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
 fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
@@ -299,6 +308,7 @@ fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::
         inputs.schedules.grouting.len(),
         inputs.scene.effects
     );
+    print_warnings(&inputs.warnings);
     let request = args.request();
     let bar = groutready::progress::bar("simulating");
     let summary = app::plan::plan(&inputs, &out, &request, &mut |p| match p {

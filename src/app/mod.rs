@@ -62,6 +62,8 @@ pub struct Inputs {
     pub schedules_dir: PathBuf,
     pub schedules: Schedules,
     pub mesh: Mesh,
+    /// inputs accepted but questionable ([`schedule::warnings`])
+    pub warnings: Vec<schedule::Warning>,
 }
 
 /// Builds the scene's mesh.
@@ -99,6 +101,7 @@ pub fn load_inputs(scene_path: &Path, schedules_dir: Option<&Path>) -> Result<In
         scene_path: scene_path.to_path_buf(),
         scene,
         schedules_dir: dir,
+        warnings: schedule::warnings(&schedules),
         schedules,
         mesh,
     })
@@ -202,6 +205,9 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
             "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes, max live dofs {} ({} free, the others supported)\n",
             m.steps, m.symbolic, m.numeric, m.contact_iterations, m.max_dofs, m.max_free_dofs
         );
+    }
+    for w in inputs.warnings.iter().chain(&stats.warnings) {
+        s += &format!("warning: {w}\n");
     }
     s
 }

@@ -90,13 +90,17 @@ pub fn plan(
     // The restart may not be later than this plan's own end.
     let end = options.end_day(epoch, &inputs.schedules);
     let dest = out.dest();
-    let previous = if request.from_scratch {
-        None
+    let found = if request.from_scratch {
+        restart::Found {
+            previous: None,
+            damaged: Vec::new(),
+        }
     } else {
-        restart::find(dest, scene, &inputs.schedules, end)?
+        restart::find(dest, scene, &inputs.schedules, end)
     };
+    let previous = found.previous;
     let prev_dir = previous.as_ref().map(|p| p.dir.clone());
-    let out_plan = planner::plan(
+    let mut out_plan = planner::plan(
         scene,
         &inputs.mesh,
         &inputs.schedules,
@@ -104,6 +108,15 @@ pub fn plan(
         previous.map(|p| p.restart),
         progress,
     )?;
+    let warnings = &mut out_plan.plan.warnings;
+    let questionable = out_plan.baseline.warnings.iter().cloned();
+    let all = inputs
+        .warnings
+        .iter()
+        .cloned()
+        .chain(found.damaged)
+        .chain(questionable);
+    warnings.splice(0..0, all);
 
     let staging = RunDir::create(dest).map_err(io_err(dest))?;
     let dir = staging.path();

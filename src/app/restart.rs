@@ -19,7 +19,7 @@ use crate::planner::edit::first_change;
 use crate::planner::plan::Restart;
 use crate::planner::{Plan, PlanOptions};
 use crate::scene::Scene;
-use crate::schedule::{self, Schedules};
+use crate::schedule::{self, Schedules, Warning};
 use crate::sim::checkpoint::{read_file, write_file, CheckpointError};
 use crate::sim::{Checkpoint, History};
 use crate::vocab::{Day, ZoneId, ZonePoint};
@@ -68,45 +68,106 @@ pub struct Previous {
     pub dir: PathBuf,
 }
 
-/// Looks for a usable restart in `run_dir`; None when there is none, the
+/// What [`find`] found: a restart, or none, and the damaged files it passed
+/// over on the way (each says what the plan did instead).
+pub struct Found {
+    pub previous: Option<Previous>,
+    pub damaged: Vec<Warning>,
+}
+
+/// Looks for a usable restart in `run_dir`; none when there is none, the
 /// scene or program changed, or no checkpoint precedes the first change.
-pub fn find(
-    run_dir: &Path,
-    scene: &Scene,
-    schedules: &Schedules,
-    end_day: Day,
-) -> Result<Option<Previous>, CheckpointError> {
+/// A damaged checkpoint (truncated, or holding a non-finite value) is passed
+/// over for the one before it; a damaged history means starting from
+/// scratch. Either is reported in [`Found::damaged`], never an error: the
+/// plan can always be made without the folder's restart data.
+pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Day) -> Found {
+    let mut found = Found {
+        previous: None,
+        damaged: Vec::new(),
+    };
     let dir = run_dir.join(RESTART_DIR);
     match std::fs::read_to_string(dir.join(FINGERPRINT)) {
         Ok(f) if f == fingerprint(scene) => {}
-        _ => return Ok(None),
+        _ => return found,
     }
     let Ok(old) = schedule::load(&dir.join(INPUTS)) else {
-        return Ok(None);
+        return found;
     };
     let first = first_change(&old, schedules);
     let limit = first.map_or(end_day, |d| scene.epoch.day(d).min(end_day));
-    let mut usable: Vec<(Day, PathBuf)> = list(&dir)?
+    let mut usable: Vec<(Day, PathBuf)> = list(&dir)
+        .unwrap_or_default()
         .into_iter()
         .filter(|&(d, _)| d <= limit)
         .collect();
     usable.sort_by_key(|u| u.0);
-    let Some((_, path)) = usable.pop() else {
-        return Ok(None);
+    let history: History = match read_file(&dir.join(HISTORY)) {
+        Ok(h) => h,
+        Err(e) => {
+            if !usable.is_empty() {
+                found.damaged.push(damaged(&dir.join(HISTORY), &e, None));
+            }
+            return found;
+        }
     };
-    let older = usable
-        .iter()
-        .map(|(_, p)| read_file(p))
-        .collect::<Result<_, _>>()?;
-    Ok(Some(Previous {
+    // Good checkpoints, oldest first; a damaged one is reported with the
+    // checkpoint the plan falls back to (the previous good one, if any).
+    let mut good: Vec<Checkpoint> = Vec::new();
+    let mut bad: Vec<(PathBuf, CheckpointError)> = Vec::new();
+    for (_, path) in &usable {
+        match read_checkpoint(path) {
+            Ok(ck) => good.push(ck),
+            Err(e) => bad.push((path.clone(), e)),
+        }
+    }
+    let latest = good.pop();
+    for (path, e) in &bad {
+        let instead = latest.as_ref().map(|c| (c.day, scene.epoch.date(c.day)));
+        found.damaged.push(damaged(path, e, Some(instead)));
+    }
+    found.previous = latest.map(|checkpoint| Previous {
         restart: Restart {
-            checkpoint: read_file(&path)?,
-            older,
-            history: read_file(&dir.join(HISTORY))?,
+            checkpoint,
+            older: good,
+            history,
         },
         first_change: first,
         dir,
-    }))
+    });
+    found
+}
+
+/// Reads a checkpoint and refuses one holding a non-finite value.
+fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
+    let ck: Checkpoint = read_file(path)?;
+    match ck.non_finite() {
+        None => Ok(ck),
+        Some(what) => Err(CheckpointError::NonFinite {
+            path: path.display().to_string(),
+            what,
+        }),
+    }
+}
+
+/// The warning for a damaged restart file; `instead` is the checkpoint used
+/// in its place (`Some(None)`: none left, from scratch; `None`: the history
+/// itself is damaged, from scratch).
+fn damaged(path: &Path, e: &CheckpointError, instead: Option<Option<(Day, NaiveDate)>>) -> Warning {
+    let cause = e.cause();
+    let what = match instead {
+        Some(Some((day, date))) => {
+            format!(
+                "restarting from the checkpoint of {date} ({}) instead",
+                ck_name(day)
+            )
+        }
+        _ => "planning from scratch instead".to_string(),
+    };
+    Warning::about_file(
+        path.display().to_string(),
+        format!("damaged restart file ({cause}); {what}"),
+    )
 }
 
 fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
@@ -244,7 +305,7 @@ pub fn open(dir: &Path) -> Result<Opened, CheckpointError> {
     })?;
     let mut checkpoints: Vec<Checkpoint> = list(&r)?
         .iter()
-        .map(|(_, p)| read_file(p))
+        .map(|(_, p)| read_checkpoint(p))
         .collect::<Result<_, _>>()?;
     checkpoints.sort_by_key(|c| c.day);
     Ok(Opened {

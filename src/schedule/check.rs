@@ -12,6 +12,7 @@ use crate::vocab::ZoneId;
 
 use super::error::ScheduleError;
 use super::read::{cell_error, EXPECTED_ID};
+use super::warning::Warning;
 use super::write;
 use super::{
     CoolingStage, GroutingPlan, JointMeter, Pour, Schedules, COOLING_CSV, COOLING_HEADER,
@@ -516,4 +517,42 @@ pub fn check_reservoir(s: &Schedules, base_z: f64, crest_z: f64) -> Result<(), S
         }
     }
     Ok(())
+}
+
+/// Inputs that are well formed and possible but questionable (the run goes
+/// on; the report repeats them): a first-stage cooling whose water is not
+/// colder than the placement temperature of a lift it cools. Its pipes warm
+/// the fresh concrete until the hydration heat takes it past the water; a
+/// site cools fresh concrete with water well below its placement
+/// temperature, so this is most likely a typo. (Later stages cool concrete
+/// that has warmed since its placement, so their water is compared with
+/// the concrete's temperature at their start, during the run:
+/// [`crate::sim::Simulation::warnings`].)
+pub fn warnings(s: &Schedules) -> Vec<Warning> {
+    let pours: HashMap<(u32, u32), &Pour> =
+        s.pours.iter().map(|p| ((p.block, p.lift), p)).collect();
+    let mut out = Vec::new();
+    for c in s.cooling.iter().filter(|c| c.stage == super::Stage::First) {
+        let coldest = (c.lift_from..=c.lift_to)
+            .filter_map(|l| pours.get(&(c.block, l)))
+            .min_by(|a, b| a.placement_temp_c.total_cmp(&b.placement_temp_c));
+        let Some(p) = coldest.filter(|p| c.water_temp_c >= p.placement_temp_c) else {
+            continue;
+        };
+        out.push(Warning::cell(
+            COOLING_CSV,
+            c.line,
+            7,
+            "water_temp_c",
+            format!(
+                "water at {} °C is not colder than block {} lift {} placed at {} °C ({POURS_CSV}:{}): the pipes warm that concrete until its hydration heat takes it past the water",
+                write::num(c.water_temp_c),
+                p.block,
+                p.lift,
+                write::num(p.placement_temp_c),
+                p.line
+            ),
+        ));
+    }
+    out
 }

@@ -83,7 +83,7 @@ use chrono::NaiveDate;
 use crate::vocab::{ZoneId, ZonePoint};
 
 pub use check::{
-    check_dates, check_reservoir, validate, MAX_LEVEL_ABOVE_CREST, MAX_SCHEDULE_YEARS,
+    check_dates, check_reservoir, validate, warnings, MAX_LEVEL_ABOVE_CREST, MAX_SCHEDULE_YEARS,
 };
 pub use error::ScheduleError;
 pub use layout::{check_against, DamLayout, ZoneExtent};

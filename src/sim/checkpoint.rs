@@ -61,11 +61,13 @@ pub enum CheckpointError {
         path: String,
         source: std::io::Error,
     },
-    #[error("{path}: not a checkpoint of this version of groutready ({source})")]
+    #[error("{path} is damaged: {} (plan again with --from-scratch)", self.cause())]
     Decode {
         path: String,
         source: postcard::Error,
     },
+    #[error("{path} is damaged: {} (plan again with --from-scratch)", self.cause())]
+    NonFinite { path: String, what: &'static str },
     #[error("{path}: {source}")]
     Json {
         path: String,
@@ -86,6 +88,19 @@ pub enum CheckpointError {
         what: &'static str,
         source: postcard::Error,
     },
+}
+
+impl CheckpointError {
+    /// What is wrong with a damaged file, without its path.
+    pub fn cause(&self) -> String {
+        match self {
+            CheckpointError::Decode { source, .. } => {
+                format!("truncated or not written by this version of groutready: {source}")
+            }
+            CheckpointError::NonFinite { what, .. } => format!("it holds a non-finite {what}"),
+            other => other.to_string(),
+        }
+    }
 }
 
 /// Writes any serde value as postcard.
@@ -112,6 +127,37 @@ pub fn read_file<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T, Checkpo
         path: path.display().to_string(),
         source,
     })
+}
+
+impl Checkpoint {
+    /// The first state variable holding a NaN or an infinity, if any (a
+    /// checkpoint is only written from a finished step, so this means the
+    /// file was damaged or written by a broken run).
+    pub fn non_finite(&self) -> Option<&'static str> {
+        let bad = |v: &[f64]| v.iter().any(|x| !x.is_finite());
+        if let Some(t) = &self.thermal {
+            if bad(&t.state.temperature) {
+                return Some("temperature");
+            }
+        }
+        let m = self.mechanics.as_ref()?;
+        if bad(&m.u) {
+            return Some("displacement");
+        }
+        if m.stress.iter().any(|e| e.iter().any(|g| bad(g))) {
+            return Some("stress");
+        }
+        if bad(&m.f_ext) || bad(&m.water_load) || bad(&m.f_contact) {
+            return Some("nodal force");
+        }
+        if m.creep.iter().any(|c| c.omega.iter().any(|w| bad(w))) {
+            return Some("creep strain");
+        }
+        m.joints
+            .iter()
+            .any(|j| !j.gap.is_finite() || bad(&j.force))
+            .then_some("joint gap or force")
+    }
 }
 
 impl Simulation<'_> {

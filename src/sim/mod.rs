@@ -16,7 +16,7 @@ use chrono::NaiveDate;
 use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene};
-use crate::schedule::{DamLayout, Schedules, ZoneExtent};
+use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
 use crate::thermal::boundary::{AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
@@ -108,13 +108,16 @@ pub struct ZoneTemps {
 }
 
 /// Counters of one run: which systems were assembled and solved.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunStats {
     pub steps: usize,
     pub pours: usize,
     pub thermal: Option<ThermalStats>,
     pub mechanics: Option<MechStats>,
     pub seconds: f64,
+    /// what the run found questionable in its inputs (cooling targets that
+    /// had no effect)
+    pub warnings: Vec<crate::schedule::Warning>,
 }
 
 /// A staged simulation of one scene with one set of schedules.
@@ -363,7 +366,55 @@ impl<'a> Simulation<'a> {
             thermal: self.thermal.as_ref().map(|t| t.stats),
             mechanics: self.mechanics.as_ref().map(|m| m.stats),
             seconds: start.elapsed().as_secs_f64(),
+            warnings: self.warnings(),
         })
+    }
+
+    /// What the run found questionable in its inputs: cooling water not
+    /// colder than the concrete when its stage started (the pipes warmed
+    /// it), and targets that had no effect (the concrete never was warmer
+    /// than them while the stage ran, so the stage ran to its end date).
+    pub fn warnings(&self) -> Vec<Warning> {
+        let Some(th) = &self.thermal else {
+            return Vec::new();
+        };
+        let region = |st: &PlannedStage| {
+            let lifts = if st.lift_from == st.lift_to {
+                format!("lift {}", st.lift_from)
+            } else {
+                format!("lifts {}-{}", st.lift_from, st.lift_to)
+            };
+            format!("block {} {lifts}", st.block)
+        };
+        let epoch = self.scene.epoch;
+        let warm = th.warm_water().map(|(st, mean)| {
+            Warning::cell(
+                COOLING_CSV,
+                st.line,
+                7,
+                "water_temp_c",
+                format!(
+                    "water at {} °C is not colder than {} when the stage started on {} (mean {mean:.1} °C): the pipes warmed the concrete",
+                    st.water_temp_c,
+                    region(st),
+                    epoch.date(Day::containing(st.start_day)),
+                ),
+            )
+        });
+        let unused = th.unused_targets().map(|st| {
+            Warning::cell(
+                COOLING_CSV,
+                st.line,
+                8,
+                "target_temp_c",
+                format!(
+                    "{} was never warmer than the target {} °C while this stage ran: the target had no effect and the stage ran to its end date",
+                    region(st),
+                    st.target_temp_c.unwrap_or(f64::NAN)
+                ),
+            )
+        });
+        warm.chain(unused).collect()
     }
 
     /// Does the pending mechanical step end at this midnight? Always with

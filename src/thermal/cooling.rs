@@ -42,6 +42,10 @@ pub enum StageStatus {
     Done {
         end_day: f64,
         reached_target: bool,
+        /// the stage had a target, but its region was never warmer than it
+        /// while the stage ran: the target had no effect (a warning)
+        #[serde(default)]
+        target_unused: bool,
     },
 }
 

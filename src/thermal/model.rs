@@ -86,6 +86,10 @@ pub struct ThermalState {
     pub status: Vec<StageStatus>,
     /// heat gained so far, by source
     pub ledger: HeatLedger,
+    /// stages whose water was not colder than their region's mean when they
+    /// started (the pipes warmed the concrete): (stage, mean at start °C)
+    #[serde(default)]
+    pub warm_water: Vec<(usize, f64)>,
 }
 
 /// A thermal model's restart data ([`ThermalModel::checkpoint`]).
@@ -173,6 +177,7 @@ impl ThermalModel {
                 live: vec![false; n_elem],
                 status,
                 ledger: HeatLedger::default(),
+                warm_water: Vec::new(),
             },
             stats: ThermalStats::default(),
         };
@@ -240,6 +245,7 @@ impl ThermalModel {
                         self.state.status[i] = StageStatus::Done {
                             end_day: day,
                             reached_target: false,
+                            target_unused: false,
                         };
                         continue;
                     }
@@ -248,6 +254,9 @@ impl ThermalModel {
                         self.lift_stage.insert((st.block, lift), i);
                     }
                     let armed = st.target_temp_c.is_some_and(|target| t0_mean > target);
+                    if st.water_temp_c >= t0_mean {
+                        self.state.warm_water.push((i, t0_mean));
+                    }
                     self.state.status[i] = StageStatus::Active {
                         start_day: day,
                         t0_mean,
@@ -272,10 +281,44 @@ impl ThermalModel {
                 self.lift_stage.remove(&(st.block, lift));
             }
         }
+        let target_unused = !reached_target
+            && st.target_temp_c.is_some()
+            && matches!(
+                self.state.status[i],
+                StageStatus::Active { armed: false, .. }
+            );
         self.state.status[i] = StageStatus::Done {
             end_day: day,
             reached_target,
+            target_unused,
         };
+    }
+
+    /// The stages whose water was not colder than their region when they
+    /// started, with the region's mean temperature then [°C].
+    pub fn warm_water(&self) -> impl Iterator<Item = (&PlannedStage, f64)> {
+        self.state
+            .warm_water
+            .iter()
+            .map(|&(i, t)| (&self.stages[i], t))
+    }
+
+    /// The stages that ended with a target that had no effect: their
+    /// region was never warmer than it while they ran.
+    pub fn unused_targets(&self) -> impl Iterator<Item = &PlannedStage> {
+        self.stages
+            .iter()
+            .zip(&self.state.status)
+            .filter(|(_, s)| {
+                matches!(
+                    s,
+                    StageStatus::Done {
+                        target_unused: true,
+                        ..
+                    }
+                )
+            })
+            .map(|(st, _)| st)
     }
 
     /// Capacity-weighted mean temperature of a stage's region.

@@ -10,6 +10,7 @@ mod cli_plan;
 mod cli_run;
 mod contact_qp;
 mod contact_solvers_agree;
+mod damaged_restart;
 mod demo_plan;
 mod fast_path;
 mod fem_elasticity;

@@ -701,3 +701,72 @@ fn reservoir_far_above_the_crest() {
     let s = load(with_line("reservoir.csv", "2025-09-01,900").path()).unwrap();
     assert_eq!(check_reservoir(&s, 1000.0, 1130.0), Ok(()));
 }
+
+#[test]
+fn a_ten_megabyte_line_is_quoted_in_short() {
+    let line = "x".repeat(10_000_000);
+    let dir = with_file("pours.csv", &format!("{line}\n"));
+    let e = load_err(&dir);
+    assert_eq!(
+        e,
+        format!(
+            r#"pours.csv:1: expected header "block,lift,pour_date,placement_temp_c", found "{}… (10000000 characters)" (missing columns "block", "lift", "pour_date", "placement_temp_c"; unexpected column "{}… (10000000 characters)")"#,
+            "x".repeat(120),
+            "x".repeat(120)
+        )
+    );
+}
+
+#[test]
+fn a_long_cell_is_quoted_in_short() {
+    let dir = with_line("pours.csv", &format!("3,7,{},15", "9".repeat(5000)));
+    assert_eq!(
+        load_err(&dir),
+        format!(
+            r#"pours.csv:20:3 (pour_date): expected a date YYYY-MM-DD, found "{}… (5000 characters)""#,
+            "9".repeat(120)
+        )
+    );
+}
+
+#[test]
+fn text_that_is_not_utf8_names_its_line_and_column() {
+    let tmp = copy_fixture();
+    let path = tmp.path().join("pours.csv");
+    let mut bytes = fs::read(&path).unwrap();
+    bytes.extend_from_slice(b"3,7,2025-06-01,1\xe9\n");
+    fs::write(&path, bytes).unwrap();
+    assert_eq!(
+        load_err(&tmp),
+        "pours.csv:20:17: expected UTF-8 text (save the file as CSV UTF-8)"
+    );
+}
+
+#[test]
+fn cooling_water_not_colder_than_the_concrete_is_a_warning() {
+    let dir = with_line("cooling.csv", "3,1,1,first,2025-01-20,2025-02-01,25,30");
+    let s = load(dir.path()).unwrap();
+    let w: Vec<String> = groutready::schedule::warnings(&s)
+        .iter()
+        .map(|w| w.to_string())
+        .collect();
+    assert_eq!(
+        w,
+        ["cooling.csv:8:7 (water_temp_c): water at 25 °C is not colder than block 3 lift 1 placed at 14.5 °C (pours.csv:14): the pipes warm that concrete until its hydration heat takes it past the water"]
+    );
+    assert!(groutready::schedule::warnings(&load(&fixture()).unwrap()).is_empty());
+}
+
+#[test]
+fn the_shipped_schedules_raise_no_warning() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("schedules");
+    for site in ["demo_arch", "small_dam", "two_blocks", "xiaowan_like"] {
+        let s = load(&root.join(site)).unwrap();
+        let w = groutready::schedule::warnings(&s);
+        assert!(
+            w.is_empty(),
+            "{site}: {:?}",
+            w.first().map(|w| w.to_string())
+        );
+    }
+}

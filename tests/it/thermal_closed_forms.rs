@@ -194,6 +194,7 @@ fn a_stage_ends_when_its_target_is_reached() {
             if let StageStatus::Done {
                 end_day,
                 reached_target,
+                ..
             } = th.state.status[0]
             {
                 assert!(reached_target);
@@ -545,4 +546,52 @@ fn submerged_upstream_nodes_take_the_water_temperature_at_their_depth() {
         .expect("a dry upstream node");
     let t = th.state.temperature[mesh.thermal_dof[dry] as usize];
     assert!((t - water.temperature(end, 0.0)).abs() > 1e-6);
+}
+
+/// A stage whose water is warmer than the concrete, with a target the
+/// concrete never exceeds: the model records both (the run's warnings), and
+/// a stage on concrete warmer than its water and target records neither.
+#[test]
+fn warm_water_and_unused_targets_are_recorded() {
+    let sc = scene(
+        "\"pipe_cooling\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 1, 1),
+        PIPES,
+    );
+    let mesh = blocks_mesh(&sc);
+    let stage = |start_day: f64, water_temp_c: f64, target: f64, line: usize| PlannedStage {
+        block: 1,
+        lift_from: 1,
+        lift_to: 1,
+        start_day,
+        end_day: Some(start_day + 10.0),
+        water_temp_c,
+        target_temp_c: Some(target),
+        line,
+    };
+    let thermal = ThermalSettings::from_scene(&sc);
+    // Placed at 15 °C: 20 °C water warms it, and it never exceeds 25 °C
+    // while that stage runs; then 8 °C water with a 12 °C target cools it.
+    let stages = vec![stage(5.0, 20.0, 25.0, 4), stage(20.0, 8.0, 12.0, 5)];
+    let mut th = ThermalModel::new(&mesh, &thermal, stages, None, None).unwrap();
+    th.pour(1, 1, 0.0, 15.0);
+    let mut t = 0.0;
+    while t < 40.0 {
+        th.update_stages(t);
+        th.step(t, t + 1.0).unwrap();
+        t += 1.0;
+    }
+    let warm: Vec<(usize, f64)> = th.warm_water().map(|(s, m)| (s.line, m)).collect();
+    assert_eq!(warm.len(), 1, "{warm:?}");
+    assert_eq!(warm[0].0, 4);
+    assert!((warm[0].1 - 15.0).abs() < 1e-9, "{warm:?}");
+    let unused: Vec<usize> = th.unused_targets().map(|s| s.line).collect();
+    assert_eq!(unused, [4]);
+    assert!(matches!(
+        th.state.status[1],
+        StageStatus::Done {
+            target_unused: false,
+            ..
+        }
+    ));
 }
