@@ -26,6 +26,16 @@ use thiserror::Error;
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
 
+impl SolveError {
+    /// The unknown (in the matrix's numbering) whose pivot failed.
+    pub fn pivot_dof(&self) -> Option<usize> {
+        match self {
+            SolveError::NotPositiveDefinite { dof, .. } => Some(*dof),
+            _ => None,
+        }
+    }
+}
+
 /// Why a factorisation or solve failed.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SolveError {

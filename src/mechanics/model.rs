@@ -146,6 +146,24 @@ pub struct MechState {
     pub f_contact: Vec<f64>,
 }
 
+impl MechError {
+    /// The unknown (in the live system's numbering) whose pivot failed.
+    pub fn pivot_dof(&self) -> Option<usize> {
+        match self {
+            MechError::Solve { source, .. } => source.pivot_dof(),
+            MechError::Joints {
+                source: JointStepError::Solve(e),
+                ..
+            } => e.pivot_dof(),
+            MechError::Live {
+                source: super::live::LiveError::Solve(e),
+                ..
+            } => e.pivot_dof(),
+            _ => None,
+        }
+    }
+}
+
 /// The staged mechanical model.
 pub struct MechanicsModel {
     tables: ElementTables,
@@ -279,6 +297,16 @@ struct StepAssembly {
 }
 
 impl MechanicsModel {
+    /// The node and component (0, 1, 2 = x, y, z) of an unknown of the
+    /// current live system, if it is a node's (not a joint pair's).
+    pub fn node_of_unknown(&self, dof: usize) -> Option<(u32, u8)> {
+        self.sys
+            .node_dofs
+            .iter()
+            .find(|&&(_, r)| r as usize == dof)
+            .map(|&(g, _)| (g / 3, (g % 3) as u8))
+    }
+
     /// Builds the model; rock elements are born (stress-free) at day 0.
     pub fn new(
         mesh: &Mesh,

@@ -276,6 +276,54 @@ pub fn hex_volume(x: &[[f64; 3]; 8]) -> f64 {
 }
 
 impl Mesh {
+    /// Where a node is, for an error message: `node 812 at (12.0, 3.5,
+    /// 1021.0) m, in block 4 lift 7, on joint 3` (the parts of the elements
+    /// using it, the joints whose faces hold it).
+    pub fn describe_node(&self, node: u32) -> String {
+        let Some(xyz) = self.nodes.get(node as usize) else {
+            return format!("node {node}");
+        };
+        let mut parts: Vec<String> = Vec::new();
+        for (e, el) in self.elements.iter().enumerate() {
+            if !el.contains(&node) {
+                continue;
+            }
+            let part = match self.parts.get(e) {
+                Some(Part::Concrete { block, lift }) => format!("block {block} lift {lift}"),
+                Some(Part::Rock) | None => "the rock".to_string(),
+            };
+            if !parts.contains(&part) {
+                parts.push(part);
+            }
+        }
+        let mut joints: Vec<u32> = self
+            .face_pairs
+            .iter()
+            .filter(|p| p.nodes_a.contains(&node) || p.nodes_b.contains(&node))
+            .map(|p| p.joint)
+            .collect();
+        joints.dedup();
+        let mut s = format!(
+            "node {node} at ({:.1}, {:.1}, {:.1}) m, in {}",
+            xyz[0],
+            xyz[1],
+            xyz[2],
+            parts.join(" and ")
+        );
+        for j in joints {
+            s += &format!(", on joint {j}");
+        }
+        s
+    }
+
+    /// A node carrying thermal dof `dof` (nodes paired across a joint share one).
+    pub fn node_of_thermal_dof(&self, dof: u32) -> Option<u32> {
+        self.thermal_dof
+            .iter()
+            .position(|&d| d == dof)
+            .map(|n| n as u32)
+    }
+
     /// Coordinates of the 8 nodes of element `e`.
     pub fn element_coords(&self, e: usize) -> [[f64; 3]; 8] {
         let c = &self.elements[e];

@@ -36,11 +36,20 @@ pub enum SimError {
     Thermal(#[from] ThermalError),
     #[error(transparent)]
     Mechanics(#[from] MechError),
-    #[error("mechanical step {step} ending {date}: {source}")]
+    #[error("mechanical step {step} ending {date}: {source}{at}")]
     MechanicsAt {
         step: usize,
         date: NaiveDate,
         source: MechError,
+        /// where the failing pivot sits (`; the failing pivot is …`), or empty
+        at: String,
+    },
+    #[error("thermal step ending {date}: {source}{at}")]
+    ThermalAt {
+        date: NaiveDate,
+        source: ThermalError,
+        /// where the failing pivot sits (`; the failing pivot is …`), or empty
+        at: String,
     },
     #[error("the scene has the reservoir_temperature effect but {0} has no reservoir.csv")]
     NoReservoir(String),
@@ -334,7 +343,21 @@ impl<'a> Simulation<'a> {
             let dt = self.ladder.next_step(self.day, next);
             let t1 = snap(self.day + dt);
             if let Some(th) = self.thermal.as_mut() {
-                th.step(self.day, t1)?;
+                if let Err(source) = th.step(self.day, t1) {
+                    let at = source
+                        .pivot_dof()
+                        .and_then(|i| th.dof_of_unknown(i))
+                        .and_then(|d| self.mesh.node_of_thermal_dof(d))
+                        .map(|n| {
+                            format!(
+                                "; the failing pivot is the temperature of {}",
+                                self.mesh.describe_node(n)
+                            )
+                        })
+                        .unwrap_or_default();
+                    let date = self.scene.epoch.date_at(t1);
+                    return Err(SimError::ThermalAt { date, source, at });
+                }
             }
             self.day = t1;
             self.steps += 1;
@@ -456,12 +479,26 @@ impl<'a> Simulation<'a> {
             _ => None,
         };
         self.mech_steps += 1;
-        m.step(self.mech_t0, t1, temps, level)
-            .map_err(|source| SimError::MechanicsAt {
+        let mesh = self.mesh;
+        m.step(self.mech_t0, t1, temps, level).map_err(|source| {
+            let at = source
+                .pivot_dof()
+                .and_then(|d| m.node_of_unknown(d))
+                .map(|(n, c)| {
+                    let axis = ["x", "y", "z"][c as usize];
+                    format!(
+                        "; the failing pivot is the {axis} displacement of {}",
+                        mesh.describe_node(n)
+                    )
+                })
+                .unwrap_or_default();
+            SimError::MechanicsAt {
                 step: self.mech_steps,
                 date: self.scene.epoch.date_at(t1),
                 source,
-            })
+                at,
+            }
+        })
     }
 
     fn record(&mut self) {

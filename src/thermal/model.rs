@@ -48,6 +48,16 @@ pub enum ThermalError {
     },
 }
 
+impl ThermalError {
+    /// The unknown (in the live system's numbering) whose pivot failed.
+    pub fn pivot_dof(&self) -> Option<usize> {
+        match self {
+            ThermalError::Solve { source, .. } => source.pivot_dof(),
+            _ => None,
+        }
+    }
+}
+
 /// Counters a benchmark prints; nothing here changes the answer.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ThermalStats {
@@ -128,6 +138,11 @@ pub struct ThermalModel {
 }
 
 impl ThermalModel {
+    /// The thermal dof of an unknown of the current live system.
+    pub fn dof_of_unknown(&self, i: usize) -> Option<u32> {
+        self.sys.dofs.get(i).copied()
+    }
+
     /// Builds the thermal model; rock elements are born at day 0 with the
     /// rock's initial field. `stages` come from cooling.csv and are ignored
     /// without pipe cooling (`settings.pipe`); `air` and `water` are ignored

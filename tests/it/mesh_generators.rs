@@ -924,3 +924,34 @@ fn vtu_meshio_check() {
         );
     }
 }
+
+/// A failed pivot is reported at its node: where it is, the block and lift
+/// of the elements around it and the joint it sits on.
+#[test]
+fn a_node_is_described_by_its_place() {
+    let m = generate_blocks(&blocks_geom(2), 3.0, 9.0).unwrap();
+    // The joint's top-lift face: its node on side a, at the crest.
+    let pair = m.face_pairs.iter().max_by_key(|p| p.layer).unwrap();
+    let node = pair.nodes_a[3];
+    let [x, y, z] = m.nodes[node as usize];
+    assert_eq!(
+        m.describe_node(node),
+        format!("node {node} at ({x:.1}, {y:.1}, {z:.1}) m, in block 1 lift 3, on joint 1")
+    );
+    assert_eq!(z, 109.0);
+    // An interior node of the bottom lift, shared by lifts 1 and 2.
+    let shared = (0..m.nodes.len() as u32)
+        .find(|&n| m.nodes[n as usize][2] == 103.0 && m.describe_node(n).contains("block 2"))
+        .unwrap();
+    assert!(
+        m.describe_node(shared)
+            .ends_with("in block 2 lift 1 and block 2 lift 2")
+            || m.describe_node(shared)
+                .contains("in block 2 lift 1 and block 2 lift 2, on joint 1"),
+        "{}",
+        m.describe_node(shared)
+    );
+    let dof = m.thermal_dof[node as usize];
+    let back = m.node_of_thermal_dof(dof).unwrap();
+    assert_eq!(m.thermal_dof[back as usize], dof);
+}
