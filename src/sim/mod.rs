@@ -516,11 +516,15 @@ impl<'a> Simulation<'a> {
             self.zone_temps.rows.push((Day::containing(self.day), row));
         }
         let Some(th) = &self.thermal else { return };
+        let live = th.live_dofs();
         let values = self
             .mesh
             .zone_points
             .iter()
-            .map(|p| th.point_temperature(self.mesh, p).unwrap_or(f64::NAN))
+            .map(|p| {
+                th.point_temperature(self.mesh, p, &live)
+                    .unwrap_or(f64::NAN)
+            })
             .collect();
         self.records.rows.push((Day::containing(self.day), values));
     }
@@ -535,6 +539,7 @@ impl<'a> Simulation<'a> {
                 th.state.temperature[self.mesh.thermal_dof[node as usize] as usize]
             })
         };
+        let live = self.thermal.as_ref().map(|th| th.live_dofs());
         let mut row = Vec::with_capacity(self.joint_records.columns.len());
         for col in &self.joint_records.columns {
             let sample = match col.site {
@@ -547,7 +552,8 @@ impl<'a> Simulation<'a> {
                             temperature: self
                                 .thermal
                                 .as_ref()
-                                .and_then(|th| th.point_temperature(self.mesh, zp))
+                                .zip(live.as_deref())
+                                .and_then(|(th, live)| th.point_temperature(self.mesh, zp, live))
                                 .unwrap_or(f64::NAN),
                         })
                 }

@@ -13,7 +13,7 @@ use super::boundary::{AirTemperature, Water};
 use super::cooling::{lift_increment, ActiveStage, LiftSourceInput, PlannedStage, StageStatus};
 use super::elements::{ElementData, SECONDS_PER_DAY};
 use super::ledger::HeatLedger;
-use super::live::{FaceCounter, LiveSystem, NONE};
+use super::live::{FaceCounter, LiveSystem};
 use super::settings::ThermalSettings;
 
 /// Relative residual above which a solve is rejected.
@@ -209,7 +209,7 @@ impl ThermalModel {
 
     /// Makes `elems` live; dofs not yet live take `initial(z)`.
     fn birth(&mut self, elems: &[u32], initial: impl Fn(f64) -> f64) {
-        let live_dof = self.live_dofs_mask();
+        let live_dof = self.live_dofs();
         for &e in elems {
             for &d in &self.data.dofs[e as usize] {
                 if !live_dof[d as usize] {
@@ -225,7 +225,10 @@ impl ThermalModel {
         self.dirty = true;
     }
 
-    fn live_dofs_mask(&self) -> Vec<bool> {
+    /// Per thermal dof: used by a live element. Read from the state, not the
+    /// live system, so a lift poured today counts before the next step
+    /// rebuilds the system.
+    pub fn live_dofs(&self) -> Vec<bool> {
         let mut mask = vec![false; self.state.temperature.len()];
         for (e, &live) in self.state.live.iter().enumerate() {
             if live {
@@ -820,14 +823,14 @@ impl ThermalModel {
     }
 
     /// Temperature at a zone point (bilinear on the joint face), if its nodes are live.
-    pub fn point_temperature(&self, mesh: &Mesh, p: &ZoneSite) -> Option<f64> {
+    /// `live` is [`ThermalModel::live_dofs`], computed once for all points.
+    pub fn point_temperature(&self, mesh: &Mesh, p: &ZoneSite, live: &[bool]) -> Option<f64> {
         let pair = &mesh.face_pairs[p.pair as usize];
-        let sys = &self.sys;
         let n = crate::fem::quad4::shape([p.s, p.t]);
         let mut value = 0.0;
         for (k, &node) in pair.nodes_a.iter().enumerate() {
             let d = mesh.thermal_dof[node as usize];
-            if sys.index_of[d as usize] == NONE {
+            if !live[d as usize] {
                 return None;
             }
             value += n[k] * self.state.temperature[d as usize];
@@ -837,7 +840,7 @@ impl ThermalModel {
 
     /// Temperature of every mesh node (joint duplicates share their dof), NaN where not live.
     pub fn nodal_field(&self, mesh: &Mesh) -> Vec<f64> {
-        let mask = self.live_dofs_mask();
+        let mask = self.live_dofs();
         mesh.thermal_dof
             .iter()
             .map(|&d| {

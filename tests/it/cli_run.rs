@@ -79,6 +79,24 @@ fn run_writes_temperatures_apertures_and_snapshots() {
         .map(|r| r[5].parse::<f64>().unwrap())
         .fold(f64::MIN, f64::max);
     assert!(peak > 24.0, "peak {peak}");
+    // Each point's history starts on the day the lift that completes its
+    // face is poured (at its placement temperature), not the day after.
+    let pours = std::fs::read_to_string("schedules/small_dam/pours.csv").unwrap();
+    let pour_dates: std::collections::HashSet<&str> = pours
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap())
+        .collect();
+    let mut first: std::collections::BTreeMap<(&str, &str, &str), &str> = Default::default();
+    for r in &rows {
+        first.entry((r[0], r[1], r[2])).or_insert(r[3]);
+    }
+    for (point, date) in &first {
+        assert!(
+            pour_dates.contains(date),
+            "{point:?} starts on {date}, not a pour date"
+        );
+    }
 
     let csv = std::fs::read_to_string(out.join("apertures.csv")).unwrap();
     let mut lines = csv.lines();
