@@ -110,11 +110,11 @@ fn zone_detail_screen() {
     // verified run and the warmer block against the closure.
     assert!(text.contains("zone below   grouted 36 d before"), "{text}");
     assert!(text.contains("warmer block 14.5 °C, max 14.0"), "{text}");
-    assert!(text.contains("= closure 13.0 + 1.0"), "{text}");
+    assert!(text.contains("  = closure 13.0 + tolerance 1.0"), "{text}");
     assert!(!text.contains("≥ 0 d"), "{text}");
     insta::assert_snapshot!("zone_detail", text);
     let wide = screen(&s.app, 110, 30);
-    for name in ["min", "remedy", "warmer block", "closure", "limit 14"] {
+    for name in ["min", "remedy", "warmer block", "closure 13.0", "limit 14"] {
         assert!(wide.contains(name), "{name} missing:\n{wide}");
     }
     insta::assert_snapshot!("zone_detail_wide", wide);

@@ -83,11 +83,6 @@ impl Theme {
         self.fg(Color::LightBlue)
     }
 
-    /// The closure temperature (the limit is closure + tolerance).
-    pub fn closure(&self) -> Style {
-        self.fg(Color::Blue)
-    }
-
     /// The limit lines (0.5 mm, closure + tolerance) and the planned date.
     pub fn limit(&self) -> Style {
         self.fg(Color::Red)

@@ -123,15 +123,9 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
     let limit = view.readiness.as_ref().map_or(closure + s.closure_tolerance_c, |r| {
         temperature_limit(r, s)
     });
-    let mut temps = temperature_series(view, result, theme, t0);
-    let xmax = chart::x(t0, t1);
-    temps.push(Series::own(
-        "closure",
-        vec![(0.0, closure), (xmax, closure)],
-        theme.closure(),
-        '·',
-        theme,
-    ));
+    // The limit only: a closure line a degree below it would share its
+    // terminal row at this height (the rules pane says closure + tolerance).
+    let temps = temperature_series(view, result, theme, t0);
     chart::render(
         "°C",
         "°C",
@@ -328,10 +322,8 @@ fn rule_lines<'a>(
         if c.rule == Rule::Temperature {
             lines.push(Line::from(Span::styled(
                 format!(
-                    "  {:<13}= closure {:.1} + {:.1}",
-                    "",
-                    r.closure_temp_c,
-                    s.closure_tolerance_c
+                    "  = closure {:.1} + tolerance {:.1}",
+                    r.closure_temp_c, s.closure_tolerance_c
                 ),
                 theme.dim(),
             )));
@@ -405,8 +397,9 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
         Span::styled("w", theme.key()),
         Span::raw(" what-if: supercool or move the date"),
     ]));
+    // Not trimmed: the indented line under a rule stays indented.
     Paragraph::new(lines)
-        .wrap(Wrap { trim: true })
+        .wrap(Wrap { trim: false })
         .block(Block::bordered().title(" Readiness "))
         .render(area, buf);
 }
