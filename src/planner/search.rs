@@ -229,8 +229,11 @@ fn verify_together(
                 Some(rem) => {
                     let a = rules.deciding_aperture(&idx, key, day);
                     rem.verified = Some((r.verdict, a));
-                    let h = zone_history(rules, &idx, key, rules.epoch.date(day));
-                    rem.verified_history = Some(clip(h, ctx.as_of));
+                    // Without a remedy the run is no answer for this zone.
+                    rem.verified_history = (rem.choice != RemedyChoice::None).then(|| {
+                        let h = zone_history(rules, &idx, key, rules.epoch.date(day));
+                        clip(h, ctx.as_of)
+                    });
                     if rem.choice == RemedyChoice::Supercool {
                         if let (Some(o), Some(a)) = (rem.supercool.as_mut(), a) {
                             o.aperture_mm = a;
@@ -260,7 +263,11 @@ fn verify_together(
 /// the run is the baseline) to the zone's date with the remedy (after it
 /// the zone is grouted).
 fn clip(mut h: ZoneHistory, from: NaiveDate) -> ZoneHistory {
-    let keep: Vec<bool> = h.dates.iter().map(|&d| d >= from && d <= h.planned).collect();
+    let keep: Vec<bool> = h
+        .dates
+        .iter()
+        .map(|&d| d >= from && d <= h.planned)
+        .collect();
     let mut k = keep.iter();
     h.dates.retain(|_| *k.next().expect("one flag per date"));
     for v in [

@@ -10,7 +10,7 @@ use chrono::NaiveDate;
 use super::meters::MeterSeries;
 use super::svg::{self, num, DateMmAxes, Frame, Svg, FRAME, TEMPERATURE_FRAME};
 use super::words;
-use crate::planner::{ZoneHistory, ZoneReadiness};
+use crate::planner::{RemedyChoice, ZoneHistory, ZoneReadiness};
 use crate::scene::PlannerSettings;
 
 /// File name of a zone's aperture chart, inside `charts/`.
@@ -49,6 +49,7 @@ fn range(series: &[&[Option<f64>]]) -> (f64, f64) {
 /// The remedy's verified run of the zone, when the search verified one.
 fn remedy_history(z: Option<&ZoneReadiness>) -> Option<&ZoneHistory> {
     z.and_then(|z| z.remedy.as_ref())
+        .filter(|r| r.choice != RemedyChoice::None)
         .and_then(|r| r.verified_history.as_ref())
         .filter(|h| !h.dates.is_empty())
 }
@@ -58,7 +59,12 @@ fn remedy_history(z: Option<&ZoneReadiness>) -> Option<&ZoneHistory> {
 fn zone_dates(h: &ZoneHistory, remedy: Option<&ZoneHistory>) -> (NaiveDate, NaiveDate) {
     let ends = [h.dates.first(), h.dates.last(), Some(&h.planned)]
         .into_iter()
-        .chain(remedy.map(|r| [r.dates.first(), r.dates.last(), Some(&r.planned)]).into_iter().flatten())
+        .chain(
+            remedy
+                .map(|r| [r.dates.first(), r.dates.last(), Some(&r.planned)])
+                .into_iter()
+                .flatten(),
+        )
         .flatten()
         .copied();
     let d0 = ends.clone().min().unwrap_or(h.planned);
@@ -136,31 +142,23 @@ fn draw_series(
 
 /// Dashed horizontal line at the least groutable aperture, labelled with it.
 fn draw_limit(svg: &mut Svg, axes: &DateMmAxes, min_aperture_mm: f64) {
-    let label = format!("{} mm", num(min_aperture_mm, 3));
-    draw_level(svg, axes, "limit", min_aperture_mm, &label, -5.0);
-}
-
-/// A horizontal line across the frame at `v`, labelled at its right end
-/// `dy` pixels below it (negative: above).
-fn draw_level(svg: &mut Svg, axes: &DateMmAxes, class: &str, v: f64, label: &str, dy: f64) {
     let f = axes.frame;
-    let y = axes.ymm(v);
-    svg.line(class, (f.left, y), (f.right, y));
-    svg.text(&format!("{class}-label"), (f.right - 4.0, y + dy), "end", label);
+    let y = axes.ymm(min_aperture_mm);
+    svg.line("limit", (f.left, y), (f.right, y));
+    svg.text(
+        "limit-label",
+        (f.right - 4.0, y - 5.0),
+        "end",
+        &format!("{} mm", num(min_aperture_mm, 3)),
+    );
 }
 
-/// A vertical line across the frame on date `d`, labelled at the top (left
-/// of the line past the middle, so the label stays inside).
-fn draw_date(svg: &mut Svg, axes: &DateMmAxes, class: &str, d: NaiveDate, label: &str, dy: f64) {
+/// A vertical line across the frame on date `d` (its date is in the
+/// legend: a label inside the frame would sit on the curves).
+fn draw_date(svg: &mut Svg, axes: &DateMmAxes, class: &str, d: NaiveDate) {
     let f: Frame = axes.frame;
     let x = axes.xd(d);
     svg.line(class, (x, f.top), (x, f.bottom));
-    let anchor = if x > (f.left + f.right) / 2.0 {
-        ("end", -4.0)
-    } else {
-        ("start", 4.0)
-    };
-    svg.text(&format!("{class}-label"), (x + anchor.1, f.top + 12.0 + dy), anchor.0, label);
 }
 
 /// The chart of a zone: the opening of the joint (three points and the
@@ -169,14 +167,23 @@ fn draw_date(svg: &mut Svg, axes: &DateMmAxes, class: &str, d: NaiveDate, label:
 /// + tolerance, the limit the rule reads); the planned date on both, and the
 /// remedy's verified run dashed to its date. `z` is the zone's readiness
 /// (its closure temperature, verdict and remedy).
-pub fn zone_chart(h: &ZoneHistory, z: Option<&ZoneReadiness>, settings: &PlannerSettings) -> String {
+pub fn zone_chart(
+    h: &ZoneHistory,
+    z: Option<&ZoneReadiness>,
+    settings: &PlannerSettings,
+) -> String {
     let remedy = remedy_history(z);
     let axes = zone_axes_with(h, remedy, settings);
     let title = format!("Joint {}, zone {}", h.joint, h.zone);
     let mut svg = Svg::new(svg::WIDTH, svg::ZONE_HEIGHT);
     svg::title(&mut svg, &title);
     if let Some(z) = z {
-        svg.text("subtitle", (svg::WIDTH / 2.0, 24.0 + 14.0), "middle", &zone_subtitle(z));
+        svg.text(
+            "subtitle",
+            (svg::WIDTH / 2.0, 24.0 + 14.0),
+            "middle",
+            &zone_subtitle(z),
+        );
     }
     aperture_panel(&mut svg, &axes, h, remedy, settings);
     let closure = z.map_or(settings.closure_temp_c, |z| z.closure_temp_c);
@@ -185,19 +192,23 @@ pub fn zone_chart(h: &ZoneHistory, z: Option<&ZoneReadiness>, settings: &Planner
     });
     let t_axes = temperature_axes(h, remedy, closure, limit);
     temperature_panel(&mut svg, &t_axes, h, remedy, closure, limit);
+    let planned = format!("planned grouting {}", h.planned);
+    let closure_label = format!("closure {closure:.1} °C");
+    let limit_label = format!("limit {limit:.1} °C = closure + tolerance");
+    let remedy_label = remedy.map(|r| format!("with the remedy (verified), grouted {}", r.planned));
     let mut entries = vec![
         ("upstream", "upstream", false),
         ("center", "center", false),
         ("downstream", "downstream", false),
         ("min", "minimum", false),
         ("limit", "least groutable aperture", false),
-        ("planned", "planned grouting", false),
+        ("planned", planned.as_str(), false),
         ("temperature", "warmer block", false),
-        ("closure", "closure", false),
-        ("temperature-limit", "closure + tolerance", false),
+        ("closure", closure_label.as_str(), false),
+        ("temperature-limit", limit_label.as_str(), false),
     ];
-    if remedy.is_some() {
-        entries.push(("remedy", "with the remedy (verified)", false));
+    if let Some(l) = &remedy_label {
+        entries.push(("remedy", l.as_str(), false));
     }
     svg::legend(&mut svg, TEMPERATURE_FRAME, &entries);
     svg.finish(&title, svg::STYLE)
@@ -215,8 +226,10 @@ fn zone_subtitle(z: &ZoneReadiness) -> String {
         s = format!("grouted {}", z.planned);
     } else if !z.verdict.groutable() {
         s.push_str(&format!(": {}", words::failed_rules(z)));
-        if let Some(r) = &z.remedy {
-            s.push_str(&format!(" · remedy {}", words::remedy_short(r)));
+        match &z.remedy {
+            Some(r) if r.choice == RemedyChoice::None => s.push_str(" · no remedy found"),
+            Some(r) => s.push_str(&format!(" · remedy {}", words::remedy_short(r))),
+            None => {}
         }
     }
     s
@@ -233,7 +246,7 @@ fn aperture_panel(
 ) {
     axes.draw(svg);
     draw_limit(svg, axes, settings.min_aperture_mm);
-    draw_date(svg, axes, "planned", h.planned, &format!("planned {}", h.planned), 0.0);
+    draw_date(svg, axes, "planned", h.planned);
     for (class, vals) in [
         ("upstream", &h.upstream),
         ("center", &h.center),
@@ -243,8 +256,7 @@ fn aperture_panel(
         draw_series(svg, axes, class, &h.dates, vals);
     }
     if let Some(r) = remedy {
-        let label = format!("remedy: grout {}", r.planned);
-        draw_date(svg, axes, "remedy-date", r.planned, &label, 14.0);
+        draw_date(svg, axes, "remedy-date", r.planned);
         let vals = r.series(settings.aperture_point);
         draw_series(svg, axes, "remedy", &r.dates, vals);
     }
@@ -262,20 +274,16 @@ fn temperature_panel(
     limit: f64,
 ) {
     axes.draw(svg);
-    // The limit's label sits above its line; the closure's would overlap it
-    // when the two are close, so the closure's moves below its own line.
-    let close = axes.ymm(closure) - axes.ymm(limit) < 16.0;
-    let label = format!("closure {closure:.1} °C");
-    draw_level(svg, axes, "closure", closure, &label, if close { 15.0 } else { -5.0 });
-    let label = format!("limit {limit:.1} °C (closure + tolerance)");
-    draw_level(svg, axes, "temperature-limit", limit, &label, -5.0);
+    // Labelled in the legend: the curves cross these lines at the right end.
     let f = axes.frame;
-    let x = axes.xd(h.planned);
-    svg.line("planned", (x, f.top), (x, f.bottom));
+    for (class, v) in [("closure", closure), ("temperature-limit", limit)] {
+        let y = axes.ymm(v);
+        svg.line(class, (f.left, y), (f.right, y));
+    }
+    draw_date(svg, axes, "planned", h.planned);
     draw_series(svg, axes, "temperature", &h.dates, &h.temperature);
     if let Some(r) = remedy {
-        let x = axes.xd(r.planned);
-        svg.line("remedy-date", (x, f.top), (x, f.bottom));
+        draw_date(svg, axes, "remedy-date", r.planned);
         draw_series(svg, axes, "remedy-temperature", &r.dates, &r.temperature);
     }
 }

@@ -217,10 +217,7 @@ impl DateMmAxes {
             (mm_ticks[0], *mm_ticks.last().expect("at least one tick")),
             (frame.bottom, frame.top),
         );
-        let x = Scale::new(
-            (day_number(d0), day_number(d1)),
-            (frame.left, frame.right),
-        );
+        let x = Scale::new((day_number(d0), day_number(d1)), (frame.left, frame.right));
         DateMmAxes {
             x,
             y,
@@ -330,14 +327,11 @@ pub const STYLE: &str = concat!(
     ".min{stroke:#000;fill:none;stroke-width:2.6}",
     ".remedy{stroke:#9467bd;fill:none;stroke-width:2.6;stroke-dasharray:8 4}",
     ".remedy-date{stroke:#9467bd;stroke-width:1.2;stroke-dasharray:2 3}",
-    ".remedy-label{fill:#9467bd}",
     ".temperature{stroke:#8c564b;fill:none;stroke-width:2}",
     ".remedy-temperature{stroke:#9467bd;fill:none;stroke-width:2;stroke-dasharray:8 4}",
     ".closure{stroke:#17becf;stroke-width:1.2;stroke-dasharray:2 3}",
     ".temperature-limit{stroke:#d62728;stroke-width:1.2;stroke-dasharray:6 4}",
     ".subtitle{fill:#333}",
-    ".closure-label{fill:#17becf}",
-    ".temperature-limit-label{fill:#d62728}",
     ".predicted{stroke:#1f77b4;fill:none;stroke-width:1.8}",
     ".measured{fill:#d62728;stroke:none}",
     ".limit{stroke:#d62728;stroke-width:1.2;stroke-dasharray:6 4}",

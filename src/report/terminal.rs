@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use super::summary::Summary;
 use super::words;
-use crate::planner::{Plan, Verdict, ZoneReadiness};
+use crate::planner::{Plan, RemedyChoice, Verdict, ZoneReadiness};
 use crate::scene::PlannerSettings;
 use crate::vocab::ZonePoint;
 
@@ -140,7 +140,10 @@ fn flagged_details(out: &mut String, plan: &Plan) {
     if zones.is_empty() {
         return;
     }
-    let _ = writeln!(out, "\nWhy the flagged zones are not groutable, and the remedy:");
+    let _ = writeln!(
+        out,
+        "\nWhy the flagged zones are not groutable, and the remedy:"
+    );
     for z in zones {
         let _ = writeln!(
             out,
@@ -167,6 +170,12 @@ fn flagged_details(out: &mut String, plan: &Plan) {
         for l in wrap(&remedy, "  → remedy: ", "    ", LINE_WIDTH) {
             let _ = writeln!(out, "{l}");
         }
+        // Why none works is what the engineer needs when there is none.
+        if let Some(r) = z.remedy.as_ref().filter(|r| r.choice == RemedyChoice::None) {
+            for l in wrap(&r.note, "    why: ", "    ", LINE_WIDTH) {
+                let _ = writeln!(out, "{l}");
+            }
+        }
         if let Some(d) = z.reopened {
             let _ = writeln!(out, "  ! re-opens {d}, after its planned grouting");
         }
@@ -180,7 +189,10 @@ fn reopenings(out: &mut String, plan: &Plan) {
     if zones.is_empty() {
         return;
     }
-    let _ = writeln!(out, "\nRe-open after the planned grouting (the grout layer cracks):");
+    let _ = writeln!(
+        out,
+        "\nRe-open after the planned grouting (the grout layer cracks):"
+    );
     for z in zones {
         let d = z.reopened.expect("filtered on Some");
         let _ = writeln!(

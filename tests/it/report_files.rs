@@ -534,9 +534,7 @@ fn markdown_report_explains_flagged_zones_and_meters() {
         !all.contains("2024-08-01"),
         "history zone listed as to grout"
     );
-    assert!(all.contains(
-        "| 1 | 2 | 2024-09-10 | 0.95 ≥ 0.50 | 1.00 | 12.8 ≤ 14.0 | ✓ groutable |"
-    ));
+    assert!(all.contains("| 1 | 2 | 2024-09-10 | 0.95 ≥ 0.50 | 1.00 | 12.8 ≤ 14.0 | ✓ groutable |"));
     assert!(all.contains(&format!(
         "| ✗ not groutable | {REASON_AGE_32} — no remedy found |"
     )));
@@ -553,7 +551,10 @@ fn markdown_report_says_warnings_reopenings_and_history_plainly() {
         "{w}"
     );
     let planned = section(&md, "Planned zones that re-open after grouting");
-    assert!(planned.contains("| 1 | 2 | 2024-09-10 | 2024-10-02 | 22 |"), "{planned}");
+    assert!(
+        planned.contains("| 1 | 2 | 2024-09-10 | 2024-10-02 | 22 |"),
+        "{planned}"
+    );
     // The history zone's re-opening stays in its own section.
     assert!(!planned.contains("| 1 | 1 |"), "{planned}");
     let history = section(&md, "Already grouted (before 2024-09-01)");
@@ -692,7 +693,7 @@ fn zone_chart_draws_three_series_the_limit_and_the_planned_date() {
     assert!((axes.xd(date("2024-09-20")) - x).abs() < 1e-9);
     assert_eq!(attr(&doc, "<line class=\"planned\"", "x1"), svg::px(x));
     assert_eq!(attr(&doc, "<line class=\"planned\"", "x2"), "594.1");
-    assert!(doc.contains(">planned 2024-09-20</text>"));
+    assert!(doc.contains(">planned grouting 2024-09-20</text>"));
 
     // The first upstream point is on 2024-06-15 at 0.11 + 0.1 = 0.21 mm.
     let first = attr(&doc, "<polyline class=\"upstream\"", "points");
@@ -800,7 +801,10 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         "{header}"
     );
     let sc = line("2", "2", "2024-09-20");
-    assert!(sc.contains("0.41 < 0.50") && sc.contains("14.6 > 14.0"), "{sc}");
+    assert!(
+        sc.contains("0.41 < 0.50") && sc.contains("14.6 > 14.0"),
+        "{sc}"
+    );
     assert!(sc.contains("✗ not groutable"), "{sc}");
     assert!(sc.ends_with("opening, temperature"), "{sc}");
     let no = line("3", "2", "2024-10-05");
@@ -814,7 +818,10 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         "{mg}"
     );
     let ok = line("1", "2", "2024-09-10");
-    assert!(ok.contains("12.8 ≤ 14.0") && ok.ends_with("✓ groutable"), "{ok}");
+    assert!(
+        ok.contains("12.8 ≤ 14.0") && ok.ends_with("✓ groutable"),
+        "{ok}"
+    );
     // Nothing is cut: every reason and remedy in full below the table.
     assert!(!t.contains('…'), "{t}");
     for text in [
@@ -824,7 +831,7 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         REASON_AGE_32,
         "→ remedy: supercool 1.25 °C → 0.62 mm (verified marginal, 0.61 mm)",
         "→ remedy: delay 12 d → 2024-10-13, 0.55 mm (+ zone 2) (verified marginal, 0.55 mm)",
-        "→ remedy: no remedy found",
+        "→ remedy: no remedy found\n    why: neither 3 °C of supercooling nor 60 days",
     ] {
         assert!(t.contains(text), "{text:?} missing:\n{t}");
     }
@@ -860,7 +867,8 @@ fn verified_run() -> ZoneHistory {
     let dates: Vec<NaiveDate> = (0..6)
         .map(|i| date("2024-09-01") + chrono::Duration::days(7 * i))
         .collect();
-    let v = |a: f64, b: f64| -> Vec<Option<f64>> { (0..6).map(|i| Some(a + b * i as f64)).collect() };
+    let v =
+        |a: f64, b: f64| -> Vec<Option<f64>> { (0..6).map(|i| Some(a + b * i as f64)).collect() };
     ZoneHistory {
         joint: 2,
         zone: 2,
@@ -903,10 +911,9 @@ fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
     }
     for text in [
         ">warmer block [°C]</text>",
-        ">limit 14.0 °C (closure + tolerance)</text>",
+        ">limit 14.0 °C = closure + tolerance</text>",
         ">closure 13.0 °C</text>",
-        ">remedy: grout 2024-10-06</text>",
-        ">with the remedy (verified)</text>",
+        ">with the remedy (verified), grouted 2024-10-06</text>",
         ">✗ not groutable: opening, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
     ] {
         assert!(doc.contains(text), "{text} missing");
@@ -928,11 +935,21 @@ fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
     let t_axes = charts::temperature_axes(h, Some(&r), 13.0, 14.0);
     let y = t_axes.ymm(14.0);
     assert!(y > svg::FRAME.bottom && y < svg::TEMPERATURE_FRAME.bottom);
-    assert_eq!(attr(&doc, "<line class=\"temperature-limit\"", "y1"), svg::px(y));
-    assert_eq!(attr(&doc, "<line class=\"closure\"", "y1"), svg::px(t_axes.ymm(13.0)));
+    assert_eq!(
+        attr(&doc, "<line class=\"temperature-limit\"", "y1"),
+        svg::px(y)
+    );
+    assert_eq!(
+        attr(&doc, "<line class=\"closure\"", "y1"),
+        svg::px(t_axes.ymm(13.0))
+    );
 
     // Without a verified run there is no remedy series.
-    let plain = charts::zone_chart(h, plan.zones.iter().find(|z| z.zone == 1 && z.joint == 3), &plan.settings);
+    let plain = charts::zone_chart(
+        h,
+        plan.zones.iter().find(|z| z.zone == 1 && z.joint == 3),
+        &plan.settings,
+    );
     assert!(!plain.contains("class=\"remedy"), "no remedy drawn");
 }
 
@@ -943,7 +960,10 @@ fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
     z.checks.retain(|c| c.rule != Rule::Aperture);
     z.remedy = None;
     let doc = charts::zone_chart(&plan.histories[1], Some(&z), &plan.settings);
-    assert!(doc.contains(">✗ not groutable: temperature</text>"), "{doc}");
+    assert!(
+        doc.contains(">✗ not groutable: temperature</text>"),
+        "{doc}"
+    );
     assert!(!doc.contains("not groutable: opening"));
     // The terminal says the same, the opening passing its limit.
     let mut p = fixture();
@@ -951,5 +971,8 @@ fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
     p.zones[3].apertures_mm.min = Some(0.8);
     let t = report::readiness_table(&p);
     let row = t.lines().find(|l| l.contains("2024-09-20")).unwrap();
-    assert!(row.contains("0.80 ≥ 0.50") && row.ends_with("temperature"), "{row}");
+    assert!(
+        row.contains("0.80 ≥ 0.50") && row.ends_with("temperature"),
+        "{row}"
+    );
 }

@@ -61,8 +61,8 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             .style(style)
         })
         .collect();
-    let header = Row::new(vec!["Joint", "Zone", "Planned", "mm", "Fails", "Remedy"])
-        .style(theme.dim());
+    let header =
+        Row::new(vec!["Joint", "Zone", "Planned", "mm", "Fails", "Remedy"]).style(theme.dim());
     Table::new(
         rows,
         [

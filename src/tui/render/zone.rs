@@ -14,7 +14,9 @@ use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
 use super::chart::{self, Series};
 use super::Theme;
 use crate::planner::whatif::WhatIfOutcome;
-use crate::planner::{MeterComparison, Rule, RuleCheck, Verdict, ZoneHistory, ZoneReadiness};
+use crate::planner::{
+    MeterComparison, RemedyChoice, Rule, RuleCheck, Verdict, ZoneHistory, ZoneReadiness,
+};
 use crate::report::words::{
     deciding_aperture, max_block_temp, mm, opt, remedy_short, temperature_limit, verdict_symbol,
     verdict_words, verified_words,
@@ -120,9 +122,10 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
         .readiness
         .as_ref()
         .map_or(s.closure_temp_c, |r| r.closure_temp_c);
-    let limit = view.readiness.as_ref().map_or(closure + s.closure_tolerance_c, |r| {
-        temperature_limit(r, s)
-    });
+    let limit = view
+        .readiness
+        .as_ref()
+        .map_or(closure + s.closure_tolerance_c, |r| temperature_limit(r, s));
     // The limit only: a closure line a degree below it would share its
     // terminal row at this height (the rules pane says closure + tolerance).
     let temps = temperature_series(view, result, theme, t0);
@@ -145,6 +148,7 @@ fn remedy_history(view: &ZoneView) -> Option<&ZoneHistory> {
     view.readiness
         .as_ref()
         .and_then(|r| r.remedy.as_ref())
+        .filter(|r| r.choice != RemedyChoice::None)
         .and_then(|r| r.verified_history.as_ref())
         .filter(|h| !h.dates.is_empty())
 }
@@ -301,11 +305,7 @@ fn rule_text(c: &RuleCheck) -> (&'static str, String) {
     }
 }
 
-fn rule_lines<'a>(
-    r: &ZoneReadiness,
-    s: &PlannerSettings,
-    theme: &Theme,
-) -> Vec<Line<'a>> {
+fn rule_lines<'a>(r: &ZoneReadiness, s: &PlannerSettings, theme: &Theme) -> Vec<Line<'a>> {
     let mut lines = Vec::new();
     for c in &r.checks {
         let (name, text) = rule_text(c);
