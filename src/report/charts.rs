@@ -163,9 +163,9 @@ fn draw_date(svg: &mut Svg, axes: &DateMmAxes, class: &str, d: NaiveDate) {
 
 /// The chart of a zone: the opening of the joint (three points and the
 /// minimum the rule reads, against the least groutable aperture) over the
-/// warmer block's temperature (against the closure temperature and closure
-/// + tolerance, the limit the rule reads); the planned date on both, and the
-/// remedy's verified run dashed to its date. `z` is the zone's readiness
+/// warmer block's temperature (against the closure temperature and the
+/// limit the rule reads, closure plus tolerance); the planned date on both,
+/// and the remedy's verified run dashed to its date. `z` is the zone's readiness
 /// (its closure temperature, verdict and remedy).
 pub fn zone_chart(
     h: &ZoneHistory,

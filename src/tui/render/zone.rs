@@ -188,13 +188,7 @@ fn aperture_series(
     ));
     let point = data.run.plan.settings.aperture_point;
     if let Some(r) = remedy_history(view) {
-        series.push(Series::own(
-            "remedy",
-            chart::points(r, t0, r.series(point)),
-            theme.remedy(),
-            '∘',
-            theme,
-        ));
+        series.push(remedy_series(r, t0, r.series(point), theme));
     }
     if let Some(r) = result {
         let v = r.history.series(data.run.plan.settings.aperture_point);
@@ -220,6 +214,17 @@ fn aperture_series(
     series
 }
 
+/// A series of the remedy's verified run, in its own style.
+fn remedy_series(r: &ZoneHistory, t0: NaiveDate, v: &[Option<f64>], theme: &Theme) -> Series {
+    Series::own(
+        "remedy",
+        chart::points(r, t0, v),
+        theme.remedy(),
+        '∘',
+        theme,
+    )
+}
+
 /// The warmer block's mean temperature over the zone (what the rule
 /// reads), the remedy's and the what-if's.
 fn temperature_series(
@@ -236,13 +241,7 @@ fn temperature_series(
         1,
     )];
     if let Some(r) = remedy_history(view) {
-        temps.push(Series::own(
-            "remedy",
-            chart::points(r, t0, &r.temperature),
-            theme.remedy(),
-            '∘',
-            theme,
-        ));
+        temps.push(remedy_series(r, t0, &r.temperature, theme));
     }
     if let Some(r) = result {
         temps.push(Series::line(
