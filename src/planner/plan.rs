@@ -241,8 +241,10 @@ pub fn zone_history(
         h.center.push(a.center);
         h.downstream.push(a.downstream);
         h.min.push(a.min);
+        // The warmer block, as the temperature rule reads it (a mean of the
+        // two would sit under the limit while the rule fails).
         h.temperature.push(match (ta, tb) {
-            (Some(a), Some(b)) => Some(0.5 * (a + b)),
+            (Some(a), Some(b)) => Some(a.max(b)),
             (a, b) => a.or(b),
         });
     }

@@ -192,6 +192,11 @@ pub struct Remedy {
     pub verified: Option<(Verdict, Option<f64>)>,
     /// plain words: why this remedy, or why none works
     pub note: String,
+    /// the zone's history in that verification run, to the remedy's date
+    /// (the date it is grouted on with the remedy): the charts draw it
+    /// beside the baseline
+    #[serde(default)]
+    pub verified_history: Option<ZoneHistory>,
 }
 
 /// Aperture and temperature history of one zone, for charts.
@@ -206,7 +211,8 @@ pub struct ZoneHistory {
     pub center: Vec<Option<f64>>,
     pub downstream: Vec<Option<f64>>,
     pub min: Vec<Option<f64>>,
-    /// mean temperature of the zone's concrete (both blocks) [°C]
+    /// the warmer of the two blocks' mean temperatures over the zone [°C]:
+    /// the quantity the temperature rule checks against closure + tolerance
     pub temperature: Vec<Option<f64>>,
 }
 

@@ -26,7 +26,10 @@ use crate::sim::{History, SimError};
 use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
-use super::readiness::{DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneReadiness};
+use super::plan::zone_history;
+use super::readiness::{
+    DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory, ZoneReadiness,
+};
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
 
@@ -179,6 +182,7 @@ fn propose(
         choice,
         verified: None,
         note,
+        verified_history: None,
     }
 }
 
@@ -225,6 +229,11 @@ fn verify_together(
                 Some(rem) => {
                     let a = rules.deciding_aperture(&idx, key, day);
                     rem.verified = Some((r.verdict, a));
+                    // Without a remedy the run is no answer for this zone.
+                    rem.verified_history = (rem.choice != RemedyChoice::None).then(|| {
+                        let h = zone_history(rules, &idx, key, rules.epoch.date(day));
+                        clip(h, ctx.as_of)
+                    });
                     if rem.choice == RemedyChoice::Supercool {
                         if let (Some(o), Some(a)) = (rem.supercool.as_mut(), a) {
                             o.aperture_mm = a;
@@ -248,6 +257,30 @@ fn verify_together(
         }
         round += 1;
     }
+}
+
+/// A verification run's history of a zone from the as-of date (before it
+/// the run is the baseline) to the zone's date with the remedy (after it
+/// the zone is grouted).
+fn clip(mut h: ZoneHistory, from: NaiveDate) -> ZoneHistory {
+    let keep: Vec<bool> = h
+        .dates
+        .iter()
+        .map(|&d| d >= from && d <= h.planned)
+        .collect();
+    let mut k = keep.iter();
+    h.dates.retain(|_| *k.next().expect("one flag per date"));
+    for v in [
+        &mut h.upstream,
+        &mut h.center,
+        &mut h.downstream,
+        &mut h.min,
+        &mut h.temperature,
+    ] {
+        let mut k = keep.iter();
+        v.retain(|_| *k.next().expect("one flag per date"));
+    }
+    h
 }
 
 /// The base schedules with every proposed remedy applied; None when nothing

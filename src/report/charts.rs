@@ -1,12 +1,16 @@
-//! The two charts of the report, as SVG text: the aperture history of a
-//! zone (`charts/zone_J<j>_Z<z>.svg`) and a joint meter's readings against
-//! the prediction (`charts/meter_J<j>_Z<z>_<point>.svg`).
+//! The two charts of the report, as SVG text: the history of a zone
+//! (`charts/zone_J<j>_Z<z>.svg`: the opening of the joint with the minimum
+//! the aperture rule reads, over the warmer block's temperature against
+//! closure + tolerance, the quantity the temperature rule reads; the
+//! remedy's verified run dashed to its date) and a joint meter's readings
+//! against the prediction (`charts/meter_J<j>_Z<z>_<point>.svg`).
 
 use chrono::NaiveDate;
 
 use super::meters::MeterSeries;
-use super::svg::{self, num, DateMmAxes, Svg, FRAME};
-use crate::planner::ZoneHistory;
+use super::svg::{self, num, DateMmAxes, Frame, Svg, FRAME, TEMPERATURE_FRAME};
+use super::words;
+use crate::planner::{RemedyChoice, ZoneHistory, ZoneReadiness};
 use crate::scene::PlannerSettings;
 
 /// File name of a zone's aperture chart, inside `charts/`.
@@ -42,13 +46,69 @@ fn range(series: &[&[Option<f64>]]) -> (f64, f64) {
         })
 }
 
-/// Axes of a zone's aperture chart: the history's dates and the planned
-/// date; the apertures and the least groutable aperture.
+/// The remedy's verified run of the zone, when the search verified one.
+fn remedy_history(z: Option<&ZoneReadiness>) -> Option<&ZoneHistory> {
+    z.and_then(|z| z.remedy.as_ref())
+        .filter(|r| r.choice != RemedyChoice::None)
+        .and_then(|r| r.verified_history.as_ref())
+        .filter(|h| !h.dates.is_empty())
+}
+
+/// First and last date of a zone chart: the history's, the planned date and
+/// the remedy's run to its date.
+fn zone_dates(h: &ZoneHistory, remedy: Option<&ZoneHistory>) -> (NaiveDate, NaiveDate) {
+    let ends = [h.dates.first(), h.dates.last(), Some(&h.planned)]
+        .into_iter()
+        .chain(
+            remedy
+                .map(|r| [r.dates.first(), r.dates.last(), Some(&r.planned)])
+                .into_iter()
+                .flatten(),
+        )
+        .flatten()
+        .copied();
+    let d0 = ends.clone().min().unwrap_or(h.planned);
+    let d1 = ends.max().unwrap_or(h.planned);
+    (d0, d1)
+}
+
+/// Axes of a zone chart's aperture panel: the history's dates and the
+/// planned date; the apertures and the least groutable aperture.
 pub fn zone_axes(h: &ZoneHistory, settings: &PlannerSettings) -> DateMmAxes {
-    let d0 = h.dates.first().copied().unwrap_or(h.planned).min(h.planned);
-    let d1 = h.dates.last().copied().unwrap_or(h.planned).max(h.planned);
-    let (lo, hi) = range(&[&h.upstream, &h.center, &h.downstream]);
+    zone_axes_with(h, None, settings)
+}
+
+fn zone_axes_with(
+    h: &ZoneHistory,
+    remedy: Option<&ZoneHistory>,
+    settings: &PlannerSettings,
+) -> DateMmAxes {
+    let (d0, d1) = zone_dates(h, remedy);
+    let empty: &[Option<f64>] = &[];
+    let r = remedy.map_or(empty, |r| r.series(settings.aperture_point));
+    let (lo, hi) = range(&[&h.upstream, &h.center, &h.downstream, &h.min, r]);
     DateMmAxes::new(d0, d1, lo.min(0.0), hi.max(settings.min_aperture_mm * 1.2))
+}
+
+/// Axes of a zone chart's temperature panel: the warmer block's
+/// temperature (baseline and remedy), the closure temperature and the limit.
+pub fn temperature_axes(
+    h: &ZoneHistory,
+    remedy: Option<&ZoneHistory>,
+    closure: f64,
+    limit: f64,
+) -> DateMmAxes {
+    let (d0, d1) = zone_dates(h, remedy);
+    let empty: &[Option<f64>] = &[];
+    let r = remedy.map_or(empty, |r| r.temperature.as_slice());
+    let (lo, hi) = range(&[&h.temperature, r]);
+    DateMmAxes::in_frame(
+        TEMPERATURE_FRAME,
+        d0,
+        d1,
+        (lo.min(closure) - 0.5, hi.max(limit) + 0.5),
+        "warmer block [°C]",
+    )
 }
 
 /// Polylines of a series, broken where a value is missing (the zone's two
@@ -82,56 +142,150 @@ fn draw_series(
 
 /// Dashed horizontal line at the least groutable aperture, labelled with it.
 fn draw_limit(svg: &mut Svg, axes: &DateMmAxes, min_aperture_mm: f64) {
+    let f = axes.frame;
     let y = axes.ymm(min_aperture_mm);
-    svg.line("limit", (FRAME.left, y), (FRAME.right, y));
+    svg.line("limit", (f.left, y), (f.right, y));
     svg.text(
         "limit-label",
-        (FRAME.right - 4.0, y - 5.0),
+        (f.right - 4.0, y - 5.0),
         "end",
         &format!("{} mm", num(min_aperture_mm, 3)),
     );
 }
 
-/// The aperture chart of a zone.
-pub fn zone_chart(h: &ZoneHistory, settings: &PlannerSettings) -> String {
-    let axes = zone_axes(h, settings);
+/// A vertical line across the frame on date `d` (its date is in the
+/// legend: a label inside the frame would sit on the curves).
+fn draw_date(svg: &mut Svg, axes: &DateMmAxes, class: &str, d: NaiveDate) {
+    let f: Frame = axes.frame;
+    let x = axes.xd(d);
+    svg.line(class, (x, f.top), (x, f.bottom));
+}
+
+/// The chart of a zone: the opening of the joint (three points and the
+/// minimum the rule reads, against the least groutable aperture) over the
+/// warmer block's temperature (against the closure temperature and the
+/// limit the rule reads, closure plus tolerance); the planned date on both,
+/// and the remedy's verified run dashed to its date. `z` is the zone's readiness
+/// (its closure temperature, verdict and remedy).
+pub fn zone_chart(
+    h: &ZoneHistory,
+    z: Option<&ZoneReadiness>,
+    settings: &PlannerSettings,
+) -> String {
+    let remedy = remedy_history(z);
+    let axes = zone_axes_with(h, remedy, settings);
     let title = format!("Joint {}, zone {}", h.joint, h.zone);
-    let mut svg = Svg::new(svg::WIDTH, svg::HEIGHT);
+    let mut svg = Svg::new(svg::WIDTH, svg::ZONE_HEIGHT);
     svg::title(&mut svg, &title);
-    axes.draw(&mut svg);
-    draw_limit(&mut svg, &axes, settings.min_aperture_mm);
-    let x = axes.xd(h.planned);
-    svg.line("planned", (x, FRAME.top), (x, FRAME.bottom));
-    // Past the middle the label goes left of the line so it stays inside.
-    let anchor = if x > (FRAME.left + FRAME.right) / 2.0 {
-        ("end", -4.0)
-    } else {
-        ("start", 4.0)
-    };
-    svg.text(
-        "planned-label",
-        (x + anchor.1, FRAME.top + 12.0),
-        anchor.0,
-        &format!("planned {}", h.planned),
+    if let Some(z) = z {
+        svg.text(
+            "subtitle",
+            (svg::WIDTH / 2.0, 24.0 + 14.0),
+            "middle",
+            &zone_subtitle(z),
+        );
+    }
+    aperture_panel(&mut svg, &axes, h, remedy, settings);
+    let closure = z.map_or(settings.closure_temp_c, |z| z.closure_temp_c);
+    let limit = z.map_or(closure + settings.closure_tolerance_c, |z| {
+        words::temperature_limit(z, settings)
+    });
+    let t_axes = temperature_axes(h, remedy, closure, limit);
+    temperature_panel(&mut svg, &t_axes, h, remedy, closure, limit);
+    let planned = format!("planned grouting {}", h.planned);
+    let closure_label = format!("closure {closure:.1} °C");
+    let limit_label = format!("limit {limit:.1} °C = closure + tolerance");
+    let remedy_label = remedy.map(|r| format!("with the remedy (verified), grouted {}", r.planned));
+    let mut entries = vec![
+        ("upstream", "upstream", false),
+        ("center", "center", false),
+        ("downstream", "downstream", false),
+        ("min", "minimum", false),
+        ("limit", "least groutable aperture", false),
+        ("planned", planned.as_str(), false),
+        ("temperature", "warmer block", false),
+        ("closure", closure_label.as_str(), false),
+        ("temperature-limit", limit_label.as_str(), false),
+    ];
+    if let Some(l) = &remedy_label {
+        entries.push(("remedy", l.as_str(), false));
+    }
+    svg::legend(&mut svg, TEMPERATURE_FRAME, &entries);
+    svg.finish(&title, svg::STYLE)
+}
+
+/// "✗ not groutable: temperature · remedy delay 17 d → 2024-10-01, 1.85 mm":
+/// which rules fail, so a zone too warm does not read as one too tight.
+fn zone_subtitle(z: &ZoneReadiness) -> String {
+    let mut s = format!(
+        "{} {}",
+        words::verdict_symbol(z.verdict),
+        words::verdict_words(z.verdict)
     );
+    if z.history {
+        s = format!("grouted {}", z.planned);
+    } else if !z.verdict.groutable() {
+        s.push_str(&format!(": {}", words::failed_rules(z)));
+        match &z.remedy {
+            Some(r) if r.choice == RemedyChoice::None => s.push_str(" · no remedy found"),
+            Some(r) => s.push_str(&format!(" · remedy {}", words::remedy_short(r))),
+            None => {}
+        }
+    }
+    s
+}
+
+/// The aperture panel: limit, planned date, the points, the minimum on top,
+/// and the remedy's run of the deciding point to its date.
+fn aperture_panel(
+    svg: &mut Svg,
+    axes: &DateMmAxes,
+    h: &ZoneHistory,
+    remedy: Option<&ZoneHistory>,
+    settings: &PlannerSettings,
+) {
+    axes.draw(svg);
+    draw_limit(svg, axes, settings.min_aperture_mm);
+    draw_date(svg, axes, "planned", h.planned);
     for (class, vals) in [
         ("upstream", &h.upstream),
         ("center", &h.center),
         ("downstream", &h.downstream),
+        ("min", &h.min),
     ] {
-        draw_series(&mut svg, &axes, class, &h.dates, vals);
+        draw_series(svg, axes, class, &h.dates, vals);
     }
-    svg::legend(
-        &mut svg,
-        &[
-            ("upstream", "upstream", false),
-            ("center", "center", false),
-            ("downstream", "downstream", false),
-            ("limit", "least groutable aperture", false),
-            ("planned", "planned grouting", false),
-        ],
-    );
-    svg.finish(&title, svg::STYLE)
+    if let Some(r) = remedy {
+        draw_date(svg, axes, "remedy-date", r.planned);
+        let vals = r.series(settings.aperture_point);
+        draw_series(svg, axes, "remedy", &r.dates, vals);
+    }
+}
+
+/// The temperature panel: the closure temperature, the limit the rule
+/// reads (closure + tolerance), the planned date, the warmer block, and the
+/// remedy's run to its date.
+fn temperature_panel(
+    svg: &mut Svg,
+    axes: &DateMmAxes,
+    h: &ZoneHistory,
+    remedy: Option<&ZoneHistory>,
+    closure: f64,
+    limit: f64,
+) {
+    axes.draw(svg);
+    // Labelled in the legend: the curves cross these lines at the right end.
+    let f = axes.frame;
+    for (class, v) in [("closure", closure), ("temperature-limit", limit)] {
+        let y = axes.ymm(v);
+        svg.line(class, (f.left, y), (f.right, y));
+    }
+    draw_date(svg, axes, "planned", h.planned);
+    draw_series(svg, axes, "temperature", &h.dates, &h.temperature);
+    if let Some(r) = remedy {
+        draw_date(svg, axes, "remedy-date", r.planned);
+        draw_series(svg, axes, "remedy-temperature", &r.dates, &r.temperature);
+    }
 }
 
 /// The predicted aperture at a meter's point over the zone's history, when
@@ -202,6 +356,7 @@ pub fn meter_chart(
     svg.close_group();
     svg::legend(
         &mut svg,
+        FRAME,
         &[
             ("predicted", "predicted", false),
             ("measured", "measured", true),
@@ -236,7 +391,7 @@ mod tests {
             min: vec![None; 6],
             temperature: vec![None; 6],
         };
-        let doc = zone_chart(&h, &PlannerSettings::default());
+        let doc = zone_chart(&h, None, &PlannerSettings::default());
         assert_eq!(doc.matches("<polyline class=\"upstream\"").count(), 2);
         assert_eq!(doc.matches("<polyline class=\"center\"").count(), 0);
         assert_eq!(doc.matches("<circle class=\"center\"").count(), 3);

@@ -1,7 +1,9 @@
-//! `report.md`: the report an engineer reads. Summary and rules, the flagged
-//! zones with their reasons, remedy and aperture chart, the marginal zones,
-//! the grouted zones that re-opened, the joint meters against the
-//! prediction, and a compact table of every zone still to grout.
+//! `report.md`: the report an engineer reads. Summary and rules, the input
+//! warnings, the flagged zones with their reasons, remedy and chart (opening
+//! and temperature), the marginal zones, the zones that re-open after
+//! grouting, the zones already grouted (history, no verdict), the joint
+//! meters against the prediction, and a compact table of every zone still
+//! to grout. Values stand beside the limit applied to them.
 
 use std::fmt::Write;
 
@@ -24,15 +26,6 @@ fn row(out: &mut String, cells: &[String]) {
 fn header(out: &mut String, names: &[&str]) {
     let _ = writeln!(out, "| {} |", names.join(" | "));
     let _ = writeln!(out, "|{}", "---|".repeat(names.len()));
-}
-
-/// "14.8 / 13.0": the warmer block against the closure temperature.
-fn temps(z: &ZoneReadiness) -> String {
-    format!(
-        "{} / {:.1}",
-        opt(words::max_block_temp(z), |t| format!("{t:.1}")),
-        z.closure_temp_c
-    )
 }
 
 fn summary(out: &mut String, plan: &Plan) {
@@ -94,7 +87,7 @@ fn flagged(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Min aperture mm",
+            "Opening mm (limit)",
             "Reasons",
             "Remedy",
             "Verified",
@@ -109,7 +102,7 @@ fn flagged(out: &mut String, plan: &Plan) {
                 z.joint.to_string(),
                 z.zone.to_string(),
                 z.planned.to_string(),
-                opt(z.apertures_mm.min, mm),
+                words::aperture_vs_limit(z, &plan.settings),
                 z.reasons(),
                 r.map(words::remedy_short)
                     .unwrap_or_else(|| "not searched".into()),
@@ -120,22 +113,43 @@ fn flagged(out: &mut String, plan: &Plan) {
     }
     out.push('\n');
     for z in &zones {
-        let _ = writeln!(out, "### Joint {}, zone {}\n", z.joint, z.zone);
-        if plan
-            .histories
-            .iter()
-            .any(|h| h.joint == z.joint && h.zone == z.zone)
-        {
-            let _ = writeln!(
-                out,
-                "![Aperture history of joint {}, zone {}](charts/{})\n",
-                z.joint,
-                z.zone,
-                zone_chart_file(z.joint, z.zone)
-            );
-        } else {
-            let _ = writeln!(out, "No aperture history in the plan for this zone.\n");
+        flagged_zone(out, plan, z);
+    }
+}
+
+/// One flagged zone: its reasons in full, the remedy, a re-opening, the chart.
+fn flagged_zone(out: &mut String, plan: &Plan, z: &ZoneReadiness) {
+    let _ = writeln!(out, "### Joint {}, zone {}\n", z.joint, z.zone);
+    for c in z.checks.iter().filter(|c| !c.passed) {
+        if let Some(r) = &c.reason {
+            let _ = writeln!(out, "- ✗ {r}");
         }
+    }
+    if let Some(r) = &z.remedy {
+        let mut t = words::remedy_short(r);
+        if let Some(v) = words::verified_words(r) {
+            t.push_str(&format!(" ({v})"));
+        }
+        let _ = writeln!(out, "- Remedy: {t}");
+    }
+    if let Some(d) = z.reopened {
+        let _ = writeln!(out, "- Re-opens {d}, after its planned grouting");
+    }
+    out.push('\n');
+    if plan
+        .histories
+        .iter()
+        .any(|h| h.joint == z.joint && h.zone == z.zone)
+    {
+        let _ = writeln!(
+            out,
+            "![Opening and temperature history of joint {}, zone {}](charts/{})\n",
+            z.joint,
+            z.zone,
+            zone_chart_file(z.joint, z.zone)
+        );
+    } else {
+        let _ = writeln!(out, "No history in the plan for this zone.\n");
     }
 }
 
@@ -154,9 +168,9 @@ fn marginal(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Min aperture mm",
+            "Opening mm (limit)",
             "Center mm",
-            "Tmax / closure °C",
+            "Warmer block °C (limit)",
             "Why",
         ],
     );
@@ -167,9 +181,9 @@ fn marginal(out: &mut String, plan: &Plan) {
                 z.joint.to_string(),
                 z.zone.to_string(),
                 z.planned.to_string(),
-                opt(z.apertures_mm.min, mm),
+                words::aperture_vs_limit(z, &plan.settings),
                 opt(z.apertures_mm.center, mm),
-                temps(z),
+                words::temperature_vs_limit(z, &plan.settings),
                 words::marginal_words(z, &plan.settings),
             ],
         );
@@ -177,38 +191,94 @@ fn marginal(out: &mut String, plan: &Plan) {
     out.push('\n');
 }
 
+/// The zones whose grout layer the simulation cracks after grouting: the
+/// ones grouted already, and the ones still to grout (after their planned
+/// date, as planned).
 fn reopened(out: &mut String, plan: &Plan) {
-    let zones: Vec<&ZoneReadiness> = plan
-        .zones
-        .iter()
-        .filter(|z| z.history && z.reopened.is_some())
-        .collect();
+    for (history, title) in [
+        (true, "Grouted zones that re-opened"),
+        (false, "Planned zones that re-open after grouting"),
+    ] {
+        let zones: Vec<&ZoneReadiness> = plan
+            .zones
+            .iter()
+            .filter(|z| z.history == history && z.reopened.is_some())
+            .collect();
+        if zones.is_empty() {
+            continue;
+        }
+        let _ = writeln!(out, "## {title}\n");
+        let grouted = if history { "Grouted" } else { "Planned" };
+        header(
+            out,
+            &["Joint", "Zone", grouted, "Re-opened", "Days after grouting"],
+        );
+        for z in zones {
+            let d = z.reopened.expect("filtered on Some");
+            row(
+                out,
+                &[
+                    z.joint.to_string(),
+                    z.zone.to_string(),
+                    z.planned.to_string(),
+                    d.to_string(),
+                    (d - z.planned).num_days().to_string(),
+                ],
+            );
+        }
+        out.push('\n');
+    }
+}
+
+/// The zones grouted before the as-of date: history, listed with what the
+/// simulation gave on their grouting date but without a verdict (today's
+/// rules do not re-judge a zone already grouted).
+fn already_grouted(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan.zones.iter().filter(|z| z.history).collect();
     if zones.is_empty() {
         return;
     }
-    let _ = writeln!(out, "## Grouted zones that re-opened\n");
+    let _ = writeln!(out, "## Already grouted (before {})\n", plan.as_of);
+    let _ = writeln!(
+        out,
+        "History: these zones were grouted before the as-of date; they are not re-checked \
+         and get no verdict. Values are the simulation's on the grouting date.\n"
+    );
     header(
         out,
         &[
             "Joint",
             "Zone",
             "Grouted",
+            "Least opening mm",
+            "Warmer block °C",
             "Re-opened",
-            "Days after grouting",
         ],
     );
     for z in zones {
-        let d = z.reopened.expect("filtered on Some");
         row(
             out,
             &[
                 z.joint.to_string(),
                 z.zone.to_string(),
                 z.planned.to_string(),
-                d.to_string(),
-                (d - z.planned).num_days().to_string(),
+                opt(z.apertures_mm.min, mm),
+                opt(words::max_block_temp(z), |t| format!("{t:.1}")),
+                z.reopened.map(|d| d.to_string()).unwrap_or("no".into()),
             ],
         );
+    }
+    out.push('\n');
+}
+
+/// The inputs the plan accepted but that look wrong, each where it is.
+fn warnings(out: &mut String, plan: &Plan) {
+    if plan.warnings.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "## Warnings\n");
+    for w in &plan.warnings {
+        let _ = writeln!(out, "- {}", cell(&w.to_string()));
     }
     out.push('\n');
 }
@@ -285,9 +355,9 @@ fn all_to_grout(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Min mm",
+            "Opening mm (limit)",
             "Center mm",
-            "Tmax / closure °C",
+            "Warmer block °C (limit)",
             "Verdict",
             "Reasons — remedy",
         ],
@@ -299,9 +369,9 @@ fn all_to_grout(out: &mut String, plan: &Plan) {
                 z.joint.to_string(),
                 z.zone.to_string(),
                 z.planned.to_string(),
-                opt(z.apertures_mm.min, mm),
+                words::aperture_vs_limit(z, &plan.settings),
                 opt(z.apertures_mm.center, mm),
-                temps(z),
+                words::temperature_vs_limit(z, &plan.settings),
                 format!(
                     "{} {}",
                     words::verdict_symbol(z.verdict),
@@ -323,9 +393,11 @@ pub fn render(plan: &Plan) -> String {
         plan.scene, plan.as_of
     );
     summary(&mut out, plan);
+    warnings(&mut out, plan);
     flagged(&mut out, plan);
     marginal(&mut out, plan);
     reopened(&mut out, plan);
+    already_grouted(&mut out, plan);
     meters_section(&mut out, plan);
     all_to_grout(&mut out, plan);
     out

@@ -4,9 +4,10 @@
 //! - `readiness.csv`: one row per zone (`table`)
 //! - `report.md`: the report to read (`markdown`)
 //! - `report.json`: the plan for other tools (`json`)
-//! - `charts/zone_J<j>_Z<z>.svg`: aperture history of every zone the plan
-//!   has a history of, and `charts/meter_J<j>_Z<z>_<point>.svg`: every joint
-//!   meter against the prediction (`charts`, drawn by `svg`)
+//! - `charts/zone_J<j>_Z<z>.svg`: aperture and temperature history of every
+//!   zone the plan has a history of (and the remedy's verified run), and
+//!   `charts/meter_J<j>_Z<z>_<point>.svg`: every joint meter against the
+//!   prediction (`charts`, drawn by `svg`)
 //!
 //! and the readiness table for the terminal (`terminal`).
 
@@ -108,7 +109,13 @@ pub fn write_all(dir: &Path, plan: &Plan) -> Result<ReportFiles, ReportError> {
         .map(|h| {
             write(
                 charts.join(charts::zone_chart_file(h.joint, h.zone)),
-                &charts::zone_chart(h, &plan.settings),
+                &charts::zone_chart(
+                    h,
+                    plan.zones
+                        .iter()
+                        .find(|z| z.joint == h.joint && z.zone == h.zone),
+                    &plan.settings,
+                ),
             )
         })
         .collect::<Result<Vec<_>, _>>()?;

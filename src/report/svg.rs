@@ -171,33 +171,60 @@ pub const FRAME: Frame = Frame {
     bottom: HEIGHT - 70.0,
 };
 
-/// Date axis × millimetre axis of a chart, with the ticks drawn.
+/// The plotting area of a zone chart's temperature panel, under the
+/// aperture panel (`FRAME`) in a chart `ZONE_HEIGHT` high.
+pub const TEMPERATURE_FRAME: Frame = Frame {
+    left: FRAME.left,
+    top: FRAME.bottom + 50.0,
+    right: FRAME.right,
+    bottom: FRAME.bottom + 230.0,
+};
+pub const ZONE_HEIGHT: f64 = TEMPERATURE_FRAME.bottom + 100.0;
+
+/// Date axis × value axis (mm, or °C on a temperature panel) of a chart in
+/// one frame, with the ticks drawn.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DateMmAxes {
     pub x: Scale,
     pub y: Scale,
     pub date_ticks: Vec<NaiveDate>,
+    /// value ticks, in the unit of the y axis
     pub mm_ticks: Vec<f64>,
+    pub frame: Frame,
+    pub y_title: String,
 }
 
 impl DateMmAxes {
-    /// Axes spanning the dates `[d0, d1]` and the values `[lo, hi]` mm,
-    /// widened to round ticks (and always including 0 mm, so apertures are
-    /// seen against a closed joint).
+    /// Aperture axes in `FRAME` spanning the dates `[d0, d1]` and the values
+    /// `[lo, hi]` mm, widened to round ticks (and always including 0 mm, so
+    /// apertures are seen against a closed joint).
     pub fn new(d0: NaiveDate, d1: NaiveDate, lo: f64, hi: f64) -> DateMmAxes {
-        let lo = lo.min(0.0);
+        DateMmAxes::in_frame(FRAME, d0, d1, (lo.min(0.0), hi), "aperture [mm]")
+    }
+
+    /// Axes in `frame` spanning `[d0, d1]` and the values `[lo, hi]`,
+    /// widened to round ticks; `y_title` names the quantity and unit.
+    pub fn in_frame(
+        frame: Frame,
+        d0: NaiveDate,
+        d1: NaiveDate,
+        (lo, hi): (f64, f64),
+        y_title: &str,
+    ) -> DateMmAxes {
         let hi = if hi > lo { hi } else { lo + 1.0 };
         let mm_ticks = nice_ticks(lo, hi, 5);
         let y = Scale::new(
             (mm_ticks[0], *mm_ticks.last().expect("at least one tick")),
-            (FRAME.bottom, FRAME.top),
+            (frame.bottom, frame.top),
         );
-        let x = Scale::new((day_number(d0), day_number(d1)), (FRAME.left, FRAME.right));
+        let x = Scale::new((day_number(d0), day_number(d1)), (frame.left, frame.right));
         DateMmAxes {
             x,
             y,
             date_ticks: month_ticks(d0, d1, 8),
             mm_ticks,
+            frame,
+            y_title: y_title.to_string(),
         }
     }
 
@@ -211,7 +238,7 @@ impl DateMmAxes {
 
     /// Grid, axes, tick labels and the y-axis title.
     pub fn draw(&self, svg: &mut Svg) {
-        let f = FRAME;
+        let f = self.frame;
         svg.open_group("grid");
         for &t in &self.mm_ticks {
             let y = self.ymm(t);
@@ -252,27 +279,32 @@ impl DateMmAxes {
         svg.vertical_text(
             "axis-title",
             (16.0, (f.top + f.bottom) / 2.0),
-            "aperture [mm]",
+            &self.y_title,
         );
         svg.close_group();
     }
 }
 
-/// Legend entries in one row below the axes: (class of the sample, label,
-/// marker instead of a line).
-pub fn legend(svg: &mut Svg, entries: &[(&str, &str, bool)]) {
-    let y = FRAME.bottom + 40.0;
-    let mut x = FRAME.left;
+/// Legend entries in rows below the axes of `frame`: (class of the sample,
+/// label, marker instead of a line); a row that would pass the frame's right
+/// edge wraps.
+pub fn legend(svg: &mut Svg, frame: Frame, entries: &[(&str, &str, bool)]) {
+    let mut y = frame.bottom + 40.0;
+    let mut x = frame.left;
     svg.open_group("legend");
     for &(class, label, marker) in entries {
+        // Labels are short; 7 px per character is a safe estimate at 12 px.
+        let w = 40.0 + 7.0 * label.chars().count() as f64;
+        if x > frame.left && x + w - 14.0 > frame.right {
+            (x, y) = (frame.left, y + 16.0);
+        }
         if marker {
             svg.circle(class, (x + 10.0, y - 4.0), 3.5);
         } else {
             svg.line(class, (x, y - 4.0), (x + 20.0, y - 4.0));
         }
         svg.text("legend-label", (x + 26.0, y), "start", label);
-        // Labels are short; 7 px per character is a safe estimate at 12 px.
-        x += 40.0 + 7.0 * label.chars().count() as f64;
+        x += w;
     }
     svg.close_group();
 }
@@ -292,6 +324,14 @@ pub const STYLE: &str = concat!(
     ".upstream{stroke:#1f77b4;fill:none;stroke-width:1.8}",
     ".center{stroke:#2ca02c;fill:none;stroke-width:1.8}",
     ".downstream{stroke:#ff7f0e;fill:none;stroke-width:1.8}",
+    ".min{stroke:#000;fill:none;stroke-width:2.6}",
+    ".remedy{stroke:#9467bd;fill:none;stroke-width:2.6;stroke-dasharray:8 4}",
+    ".remedy-date{stroke:#9467bd;stroke-width:1.2;stroke-dasharray:2 3}",
+    ".temperature{stroke:#8c564b;fill:none;stroke-width:2}",
+    ".remedy-temperature{stroke:#9467bd;fill:none;stroke-width:2;stroke-dasharray:8 4}",
+    ".closure{stroke:#17becf;stroke-width:1.2;stroke-dasharray:2 3}",
+    ".temperature-limit{stroke:#d62728;stroke-width:1.2;stroke-dasharray:6 4}",
+    ".subtitle{fill:#333}",
     ".predicted{stroke:#1f77b4;fill:none;stroke-width:1.8}",
     ".measured{fill:#d62728;stroke:none}",
     ".limit{stroke:#d62728;stroke-width:1.2;stroke-dasharray:6 4}",

@@ -1,17 +1,20 @@
 //! The readiness table for the terminal: the zones still to grout in fixed
-//! width columns, each verdict with a symbol so it reads without colour,
-//! lines kept to `LINE_WIDTH` characters, and a one-line summary.
+//! width columns, each value beside the limit it is checked against and each
+//! verdict with a symbol so it reads without colour; then, in full, why each
+//! flagged zone fails and its remedy, the zones that re-open after grouting,
+//! the zones already grouted, the input warnings, and a one-line summary.
+//! Lines are kept to `LINE_WIDTH` characters (long words wrap, never cut).
 
 use std::fmt::Write;
 
 use super::summary::Summary;
-use super::words::{self, opt};
-use crate::planner::{Plan, Verdict, ZoneReadiness};
+use super::words;
+use crate::planner::{Plan, RemedyChoice, Verdict, ZoneReadiness};
 use crate::scene::PlannerSettings;
+use crate::vocab::ZonePoint;
 
-/// Widest line of the table, in characters.
-pub const LINE_WIDTH: usize = 120;
-
+/// Widest line of the output, in characters.
+pub const LINE_WIDTH: usize = 100;
 /// `s` cut to `width` characters, ending in … when cut.
 pub fn fit(s: &str, width: usize) -> String {
     if s.chars().count() <= width {
@@ -36,27 +39,55 @@ fn right(s: &str, width: usize) -> String {
     format!("{}{s}", " ".repeat(pad))
 }
 
-/// Reasons and remedy in `width` characters: the remedy is what the
-/// engineer acts on, so the reasons are cut first.
-fn words_cell(z: &ZoneReadiness, s: &PlannerSettings, width: usize) -> String {
-    let (Verdict::NotGroutable, Some(r)) = (z.verdict, &z.remedy) else {
-        return fit(&words::zone_words(z, s), width);
-    };
-    let remedy = words::remedy_short(r);
-    let reasons = z.reasons();
-    if reasons.is_empty() {
-        return fit(&remedy, width);
+/// `text` wrapped at spaces into lines of at most `width` characters, the
+/// first starting with `first` and the others with `rest` (prefixes written
+/// as given; a word longer than a line is left whole rather than cut).
+pub fn wrap(text: &str, first: &str, rest: &str, width: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut line = first.to_string();
+    let mut empty = true;
+    for word in text.split_whitespace() {
+        let sep = usize::from(!empty);
+        let fits = line.chars().count() + sep + word.chars().count() <= width;
+        if !empty && !fits {
+            lines.push(std::mem::replace(&mut line, rest.to_string()));
+            empty = true;
+        }
+        if !empty {
+            line.push(' ');
+        }
+        line.push_str(word);
+        empty = false;
     }
-    // Keep at least a few words of the reasons, even if the remedy is then cut.
-    let room = width.saturating_sub(remedy.chars().count() + 3).max(12);
-    fit(&format!("{} — {remedy}", fit(&reasons, room)), width)
+    lines.push(line);
+    lines
+}
+
+/// Why a zone is not plainly groutable, in a few words: the failed rules,
+/// or for a marginal zone the opening against the marginal limit.
+fn why_cell(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+    match z.verdict {
+        Verdict::Groutable => String::new(),
+        Verdict::Marginal => format!("opening below {} mm", words::mm(s.marginal_aperture_mm)),
+        Verdict::NotGroutable => words::failed_rules(z),
+    }
+}
+
+/// The aperture column's header: which opening the rule reads.
+fn opening_header(point: ZonePoint) -> &'static str {
+    match point {
+        ZonePoint::Min => "Least opening mm",
+        ZonePoint::Upstream => "Opening mm, up",
+        ZonePoint::Center => "Opening mm, ctr",
+        ZonePoint::Downstream => "Opening mm, down",
+    }
 }
 
 /// Widths of the fixed columns and the gaps before each column (numbers
 /// sit close; the verdict and the words get a wider gap to stand apart); the
 /// last column takes what is left of `LINE_WIDTH`.
-const W: [usize; 6] = [5, 4, 10, 10, 10, 15];
-const GAP: [&str; 7] = ["", " ", " ", " ", " ", "  ", "  "];
+const W: [usize; 6] = [5, 4, 10, 16, 15, 15];
+const GAP: [&str; 7] = ["", " ", " ", "  ", "  ", "  ", "  "];
 
 fn join(cells: [String; 7]) -> String {
     let mut s = String::new();
@@ -67,33 +98,23 @@ fn join(cells: [String; 7]) -> String {
     s.trim_end().to_string()
 }
 
-/// Fixed-width table of the zones still to grout, then the summary line.
-pub fn readiness_table(plan: &Plan) -> String {
-    let mut out = String::new();
-    let words_width =
+/// The fixed-width table of the zones still to grout.
+fn table(out: &mut String, plan: &Plan) {
+    let s = &plan.settings;
+    let why_width =
         LINE_WIDTH - W.iter().sum::<usize>() - GAP.iter().map(|g| g.len()).sum::<usize>();
     let header = [
         right("Joint", W[0]),
         right("Zone", W[1]),
         left("Planned", W[2]),
-        right("Min/ctr mm", W[3]),
-        right("Tmax/cl °C", W[4]),
+        right(opening_header(s.aperture_point), W[3]),
+        right("Warmer block °C", W[4]),
         left("Verdict", W[5]),
-        "Reasons — remedy".into(),
+        "Why".into(),
     ];
     let _ = writeln!(out, "{}", join(header));
     let _ = writeln!(out, "{}", "─".repeat(LINE_WIDTH));
     for z in plan.to_grout() {
-        let ap = format!(
-            "{}/{}",
-            opt(z.apertures_mm.min, words::mm),
-            opt(z.apertures_mm.center, words::mm)
-        );
-        let temp = format!(
-            "{}/{:.1}",
-            opt(words::max_block_temp(z), |t| format!("{t:.1}")),
-            z.closure_temp_c
-        );
         let verdict = format!(
             "{} {}",
             words::verdict_symbol(z.verdict),
@@ -103,14 +124,142 @@ pub fn readiness_table(plan: &Plan) -> String {
             right(&z.joint.to_string(), W[0]),
             right(&z.zone.to_string(), W[1]),
             left(&z.planned.to_string(), W[2]),
-            right(&ap, W[3]),
-            right(&temp, W[4]),
+            right(&words::aperture_vs_limit(z, s), W[3]),
+            right(&words::temperature_vs_limit(z, s), W[4]),
             left(&verdict, W[5]),
-            words_cell(z, &plan.settings, words_width),
+            fit(&why_cell(z, s), why_width),
         ];
         let _ = writeln!(out, "{}", join(row));
     }
-    let _ = writeln!(out, "{}", Summary::of(plan).line(plan.as_of));
+}
+
+/// Each flagged zone's reasons in full, its remedy and how the remedy
+/// verified.
+fn flagged_details(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan.flagged().collect();
+    if zones.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "\nWhy the flagged zones are not groutable, and the remedy:"
+    );
+    for z in zones {
+        let _ = writeln!(
+            out,
+            "Joint {} zone {}, planned {}:",
+            z.joint, z.zone, z.planned
+        );
+        for c in z.checks.iter().filter(|c| !c.passed) {
+            if let Some(r) = &c.reason {
+                for l in wrap(r, "  ✗ ", "    ", LINE_WIDTH) {
+                    let _ = writeln!(out, "{l}");
+                }
+            }
+        }
+        let remedy = match &z.remedy {
+            Some(r) => {
+                let mut t = words::remedy_short(r);
+                if let Some(v) = words::verified_words(r) {
+                    t.push_str(&format!(" ({v})"));
+                }
+                t
+            }
+            None => "not searched".into(),
+        };
+        for l in wrap(&remedy, "  → remedy: ", "    ", LINE_WIDTH) {
+            let _ = writeln!(out, "{l}");
+        }
+        // Why none works is what the engineer needs when there is none.
+        if let Some(r) = z.remedy.as_ref().filter(|r| r.choice == RemedyChoice::None) {
+            for l in wrap(&r.note, "    why: ", "    ", LINE_WIDTH) {
+                let _ = writeln!(out, "{l}");
+            }
+        }
+        if let Some(d) = z.reopened {
+            let _ = writeln!(out, "  ! re-opens {d}, after its planned grouting");
+        }
+    }
+}
+
+/// Zones still to grout whose grout layer the simulation cracks after the
+/// planned date.
+fn reopenings(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan.to_grout().filter(|z| z.reopened.is_some()).collect();
+    if zones.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "\nRe-open after the planned grouting (the grout layer cracks):"
+    );
+    for z in zones {
+        let d = z.reopened.expect("filtered on Some");
+        let _ = writeln!(
+            out,
+            "  ! joint {} zone {}: grouted {}, re-opens {d} ({} days later)",
+            z.joint,
+            z.zone,
+            z.planned,
+            (d - z.planned).num_days()
+        );
+    }
+}
+
+/// The zones grouted before the as-of date: history, not re-checked, so no
+/// verdict; those that re-opened since are named.
+fn already_grouted(out: &mut String, plan: &Plan) {
+    let zones: Vec<&ZoneReadiness> = plan.zones.iter().filter(|z| z.history).collect();
+    if zones.is_empty() {
+        return;
+    }
+    let n = zones.len();
+    let _ = writeln!(
+        out,
+        "\nAlready grouted before {} ({n} {}, history: no verdict):",
+        plan.as_of,
+        if n == 1 { "zone" } else { "zones" }
+    );
+    let list: Vec<String> = zones
+        .iter()
+        .map(|z| format!("J{} Z{} {}", z.joint, z.zone, z.planned))
+        .collect();
+    for l in wrap(&list.join(", "), "  ", "  ", LINE_WIDTH) {
+        let _ = writeln!(out, "{l}");
+    }
+    for z in zones.iter().filter(|z| z.reopened.is_some()) {
+        let d = z.reopened.expect("filtered on Some");
+        let _ = writeln!(
+            out,
+            "  ! joint {} zone {} (grouted {}) re-opened {d}",
+            z.joint, z.zone, z.planned
+        );
+    }
+}
+
+/// The inputs the plan accepted but that look wrong.
+fn warnings(out: &mut String, plan: &Plan) {
+    if plan.warnings.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "\nWarnings ({}):", plan.warnings.len());
+    for w in &plan.warnings {
+        for l in wrap(&w.to_string(), "  ! ", "    ", LINE_WIDTH) {
+            let _ = writeln!(out, "{l}");
+        }
+    }
+}
+
+/// The table of the zones still to grout, the flagged zones in full, the
+/// re-openings, the zones already grouted, the warnings, then the summary.
+pub fn readiness_table(plan: &Plan) -> String {
+    let mut out = String::new();
+    table(&mut out, plan);
+    flagged_details(&mut out, plan);
+    reopenings(&mut out, plan);
+    already_grouted(&mut out, plan);
+    warnings(&mut out, plan);
+    let _ = writeln!(out, "\n{}", Summary::of(plan).line(plan.as_of));
     out
 }
 
@@ -123,5 +272,14 @@ mod tests {
         assert_eq!(fit("abcdef", 6), "abcdef");
         assert_eq!(fit("abcdefg", 6), "abcde…");
         assert_eq!(left("✗ x", 5), "✗ x  ");
+    }
+
+    #[test]
+    fn wrap_keeps_words_whole() {
+        assert_eq!(
+            wrap("aa bb cc dd", " - ", "   ", 8),
+            [" - aa bb", "   cc dd"]
+        );
+        assert_eq!(wrap("abcdefghij", "", "", 4), ["abcdefghij"]);
     }
 }

@@ -2,7 +2,7 @@
 //! a zone, shared by the terminal table, the Markdown report and the CSV,
 //! so every output says the same thing the same way.
 
-use crate::planner::{Remedy, RemedyChoice, Verdict, ZoneReadiness};
+use crate::planner::{Remedy, RemedyChoice, Rule, RuleCheck, Verdict, ZoneReadiness};
 use crate::scene::PlannerSettings;
 use crate::vocab::ZonePoint;
 
@@ -54,6 +54,65 @@ pub fn max_block_temp(z: &ZoneReadiness) -> Option<f64> {
     }
 }
 
+/// The check of `rule` on the zone, if the plan made it.
+fn check(z: &ZoneReadiness, rule: Rule) -> Option<&RuleCheck> {
+    z.checks.iter().find(|c| c.rule == rule)
+}
+
+/// The aperture limit applied to the zone: its check's, else the settings'.
+pub fn aperture_limit(z: &ZoneReadiness, s: &PlannerSettings) -> f64 {
+    check(z, Rule::Aperture).map_or(s.min_aperture_mm, |c| c.limit)
+}
+
+/// The temperature limit applied to the zone (closure at its mid-height +
+/// tolerance): its check's, else the settings'.
+pub fn temperature_limit(z: &ZoneReadiness, s: &PlannerSettings) -> f64 {
+    check(z, Rule::Temperature).map_or(z.closure_temp_c + s.closure_tolerance_c, |c| c.limit)
+}
+
+/// "0.40 < 0.50" or "1.76 ≥ 0.50": the deciding aperture against the limit
+/// applied, the sign saying which side it is on [mm].
+pub fn aperture_vs_limit(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+    let limit = aperture_limit(z, s);
+    match deciding_aperture(z, s.aperture_point) {
+        Some(a) if a < limit => format!("{} < {}", mm(a), mm(limit)),
+        Some(a) => format!("{} ≥ {}", mm(a), mm(limit)),
+        None => format!("– vs {}", mm(limit)),
+    }
+}
+
+/// "16.9 > 13.5" or "13.0 ≤ 13.5": the warmer block against closure +
+/// tolerance [°C].
+pub fn temperature_vs_limit(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+    let limit = temperature_limit(z, s);
+    match max_block_temp(z) {
+        Some(t) if t > limit => format!("{t:.1} > {limit:.1}"),
+        Some(t) => format!("{t:.1} ≤ {limit:.1}"),
+        None => format!("– vs {limit:.1}"),
+    }
+}
+
+/// A rule in a site engineer's words, for a list of the failed ones.
+pub fn rule_words(rule: Rule) -> &'static str {
+    match rule {
+        Rule::Aperture => "opening",
+        Rule::Temperature => "temperature",
+        Rule::Age => "age",
+        Rule::Cover => "cover",
+        Rule::BottomUp => "zone below",
+    }
+}
+
+/// The failed rules in a few words: "opening, temperature".
+pub fn failed_rules(z: &ZoneReadiness) -> String {
+    z.checks
+        .iter()
+        .filter(|c| !c.passed)
+        .map(|c| rule_words(c.rule))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The proposed remedy in a few words: `supercool 1.25 °C → 0.62 mm`,
 /// `delay 12 d → 2024-10-03, 0.55 mm (+ zone 4)` (the zones above that move
 /// with it) or `no remedy found`.
@@ -72,6 +131,24 @@ pub fn remedy_short(r: &Remedy) -> String {
             s
         }
         _ => "no remedy found".into(),
+    }
+}
+
+/// The proposed remedy in fewer words, for a narrow column:
+/// `supercool 1.25 °C`, `delay 12 d → 2024-10-03 +1 zone`, `none found`.
+pub fn remedy_brief(r: &Remedy) -> String {
+    match (r.choice, &r.supercool, &r.delay) {
+        (RemedyChoice::Supercool, Some(s), _) => format!("supercool {:.2} °C", s.delta_c),
+        (RemedyChoice::Delay, _, Some(d)) => {
+            let mut s = format!("delay {} d → {}", d.days, d.date);
+            match d.also_delayed.len() {
+                0 => {}
+                1 => s.push_str(" +1 zone"),
+                n => s.push_str(&format!(" +{n} zones")),
+            }
+            s
+        }
+        _ => "none found".into(),
     }
 }
 
@@ -132,6 +209,7 @@ mod tests {
             choice,
             verified: Some((Verdict::Marginal, Some(0.6))),
             note: String::new(),
+            verified_history: None,
         }
     }
 

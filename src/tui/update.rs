@@ -8,8 +8,9 @@
 //! - flagged list: ↑↓ or jk, Enter opens the zone;
 //! - zone: arrows or hjkl go to the neighbouring zone, `w` opens the what-if,
 //!   Esc goes back;
-//! - what-if: ↑↓ or jk choose the field, ←→ hl - + change it (PgUp/PgDn a week
-//!   on the date), Enter re-simulates, `c` cancels, `s` saves the schedules,
+//! - what-if: ↑↓ or jk choose the field, ←→ hl - + change it (→ more
+//!   supercooling, a later date), PgDn a week later and PgUp a week earlier
+//!   on the date, Enter re-simulates, `c` cancels, `s` saves the schedules,
 //!   Esc cancels a running job or closes the form.
 
 use chrono::Duration;
@@ -247,8 +248,10 @@ impl App {
             }
             KeyCode::Left | KeyCode::Char('h') | KeyCode::Char('-') => change(form, -1, false),
             KeyCode::Right | KeyCode::Char('l') | KeyCode::Char('+') => change(form, 1, false),
-            KeyCode::PageDown => change(form, -1, true),
-            KeyCode::PageUp => change(form, 1, true),
+            // Down the calendar is later: PgDn a week later, PgUp a week
+            // earlier (the date only; the help and the keys line say so).
+            KeyCode::PageDown if form.field == Field::Date => change(form, 1, true),
+            KeyCode::PageUp if form.field == Field::Date => change(form, -1, true),
             KeyCode::Enter => {
                 if running {
                     return Some(Vec::new());

@@ -181,6 +181,7 @@ fn fixture() -> Plan {
             choice: RemedyChoice::Supercool,
             verified: Some((Verdict::Marginal, Some(0.61))),
             note: NOTE_22.into(),
+            verified_history: None,
         }),
     );
     let delayed = zone(
@@ -203,6 +204,7 @@ fn fixture() -> Plan {
             choice: RemedyChoice::Delay,
             verified: Some((Verdict::Marginal, Some(0.55))),
             note: "no supercooling within 3 °C opens it enough".into(),
+            verified_history: None,
         }),
     );
     let mut hopeless = zone(
@@ -220,6 +222,7 @@ fn fixture() -> Plan {
             choice: RemedyChoice::None,
             verified: None,
             note: NOTE_32.into(),
+            verified_history: None,
         }),
     );
     hopeless.cover_m = None;
@@ -459,27 +462,29 @@ fn markdown_report_explains_flagged_zones_and_meters() {
     assert_eq!(
         flagged
             .lines()
-            .filter(|l| l.starts_with("| 2 | 2 | 2024-09-20 | 0.41 |"))
+            .filter(|l| l.starts_with("| 2 | 2 | 2024-09-20 | 0.41 < 0.50 |"))
             .count(),
         1
     );
     assert_eq!(
         flagged
             .lines()
-            .filter(|l| l.starts_with("| 3 | 1 | 2024-10-01 | 0.45 |"))
+            .filter(|l| l.starts_with("| 3 | 1 | 2024-10-01 | 0.45 < 0.50 |"))
             .count(),
         1
     );
     assert_eq!(
         flagged
             .lines()
-            .filter(|l| l.starts_with("| 3 | 2 | 2024-10-05 | 0.20 |"))
+            .filter(|l| l.starts_with("| 3 | 2 | 2024-10-05 | 0.20 < 0.50 |"))
             .count(),
         1
     );
     assert!(!flagged.contains("| 2 | 1 |") && !flagged.contains("| 1 | 2 |"));
     for (j, z) in [(2, 2), (3, 1), (3, 2)] {
-        let link = format!("![Aperture history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)");
+        let link = format!(
+            "![Opening and temperature history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)"
+        );
         assert_eq!(flagged.matches(&link).count(), 1, "{link}");
         assert!(dir
             .path()
@@ -487,14 +492,14 @@ fn markdown_report_explains_flagged_zones_and_meters() {
             .is_file());
     }
     assert_eq!(
-        md.matches("![Aperture history").count(),
+        md.matches("![Opening and temperature history").count(),
         3,
         "charts of flagged zones only"
     );
 
     let marginal = section(&md, "Marginal zones");
     assert!(marginal.contains(
-        "| 2 | 1 | 2024-09-15 | 0.62 | 0.65 | 13.9 / 13.0 | aperture 0.62 mm below 0.70 mm |"
+        "| 2 | 1 | 2024-09-15 | 0.62 ≥ 0.50 | 0.65 | 13.9 ≤ 14.0 | aperture 0.62 mm below 0.70 mm |"
     ));
 
     let reopened = section(&md, "Grouted zones that re-opened");
@@ -529,10 +534,42 @@ fn markdown_report_explains_flagged_zones_and_meters() {
         !all.contains("2024-08-01"),
         "history zone listed as to grout"
     );
-    assert!(all.contains("| 1 | 2 | 2024-09-10 | 0.95 | 1.00 | 12.8 / 13.0 | ✓ groutable |"));
+    assert!(all.contains("| 1 | 2 | 2024-09-10 | 0.95 ≥ 0.50 | 1.00 | 12.8 ≤ 14.0 | ✓ groutable |"));
     assert!(all.contains(&format!(
         "| ✗ not groutable | {REASON_AGE_32} — no remedy found |"
     )));
+}
+
+#[test]
+fn markdown_report_says_warnings_reopenings_and_history_plainly() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = report::write_all(dir.path(), &fixture_with_warning_and_reopening()).unwrap();
+    let md = read(&files.markdown);
+    let w = section(&md, "Warnings");
+    assert!(
+        w.contains("- cooling.csv:12:4 (target_c): target 4.0 °C is below the closure"),
+        "{w}"
+    );
+    let planned = section(&md, "Planned zones that re-open after grouting");
+    assert!(
+        planned.contains("| 1 | 2 | 2024-09-10 | 2024-10-02 | 22 |"),
+        "{planned}"
+    );
+    // The history zone's re-opening stays in its own section.
+    assert!(!planned.contains("| 1 | 1 |"), "{planned}");
+    let history = section(&md, "Already grouted (before 2024-09-01)");
+    assert!(history.contains("not re-checked"), "{history}");
+    assert!(
+        history.contains("| 1 | 1 | 2024-08-01 | 0.90 | 12.4 | 2024-08-20 |"),
+        "{history}"
+    );
+    assert!(!history.contains("groutable"), "no verdict: {history}");
+    // Each flagged zone's reasons and remedy in full above its chart.
+    let flagged = section(&md, "Flagged zones (not groutable)");
+    assert!(flagged.contains(&format!("### Joint 2, zone 2\n\n- ✗ {REASON_APERTURE_22}\n- ✗ {REASON_TEMP_22}\n- Remedy: supercool 1.25 °C → 0.62 mm (verified marginal, 0.61 mm)\n")), "{flagged}");
+    // Without warnings, no section.
+    let (_d, _, plain) = written();
+    assert!(!read(&plain.markdown).contains("## Warnings"));
 }
 
 #[test]
@@ -627,8 +664,14 @@ fn zone_chart_draws_three_series_the_limit_and_the_planned_date() {
 
     // One polyline per series (no gaps inside), 18 upstream points after the
     // two missing ones, 20 for the others.
-    assert_eq!(doc.matches("<polyline").count(), 3);
-    for (class, n) in [("upstream", 18), ("center", 20), ("downstream", 20)] {
+    assert_eq!(doc.matches("<polyline").count(), 5);
+    for (class, n) in [
+        ("upstream", 18),
+        ("center", 20),
+        ("downstream", 20),
+        ("min", 20),
+        ("temperature", 20),
+    ] {
         let pts = attr(&doc, &format!("<polyline class=\"{class}\""), "points");
         assert_eq!(pts.split(' ').count(), n, "{class}");
     }
@@ -650,7 +693,7 @@ fn zone_chart_draws_three_series_the_limit_and_the_planned_date() {
     assert!((axes.xd(date("2024-09-20")) - x).abs() < 1e-9);
     assert_eq!(attr(&doc, "<line class=\"planned\"", "x1"), svg::px(x));
     assert_eq!(attr(&doc, "<line class=\"planned\"", "x2"), "594.1");
-    assert!(doc.contains(">planned 2024-09-20</text>"));
+    assert!(doc.contains(">planned grouting 2024-09-20</text>"));
 
     // The first upstream point is on 2024-06-15 at 0.11 + 0.1 = 0.21 mm.
     let first = attr(&doc, "<polyline class=\"upstream\"", "points");
@@ -721,12 +764,26 @@ fn meter_chart_draws_prediction_and_readings() {
     );
 }
 
+/// The fixture with what the console and report.md must also say: an input
+/// warning and a zone still to grout that re-opens after its planned date.
+fn fixture_with_warning_and_reopening() -> Plan {
+    let mut plan = fixture();
+    plan.warnings.push(groutready::schedule::Warning {
+        file: "cooling.csv".into(),
+        line: 12,
+        column: Some((4, "target_c".into())),
+        message: "target 4.0 °C is below the closure temperature by more than 8 °C".into(),
+    });
+    plan.zones[1].reopened = Some(date("2024-10-02"));
+    plan
+}
+
 #[test]
-fn terminal_table_lists_zones_to_grout_with_symbols() {
-    let plan = fixture();
+fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
+    let plan = fixture_with_warning_and_reopening();
     let t = report::readiness_table(&plan);
     for l in t.lines() {
-        assert!(l.chars().count() <= 120, "{} chars: {l}", l.chars().count());
+        assert!(l.chars().count() <= 100, "{} chars: {l}", l.chars().count());
     }
     let line = |j: &str, z: &str, date: &str| -> &str {
         t.lines()
@@ -736,36 +793,186 @@ fn terminal_table_lists_zones_to_grout_with_symbols() {
             })
             .unwrap_or_else(|| panic!("no line for J{j} Z{z}:\n{t}"))
     };
-    let sc = line("2", "2", "2024-09-20");
-    assert!(sc.contains("0.41/0.55") && sc.contains("14.6/13.0"), "{sc}");
-    assert!(sc.contains("✗ not groutable"), "{sc}");
-    assert!(sc.contains("aperture 0.41 mm"), "{sc}");
-    assert!(sc.ends_with(" — supercool 1.25 °C → 0.62 mm"), "{sc}");
-    assert!(sc.contains('…'), "long reasons are cut: {sc}");
-    let dl = line("3", "1", "2024-10-01");
-    // The remedy is kept whole; the reasons give way.
+    // Headers a site engineer reads; each value beside the limit applied
+    // (the temperature's is closure + tolerance, from the zone's check).
+    let header = t.lines().next().unwrap();
     assert!(
-        dl.ends_with("  aperture 0.… — delay 12 d → 2024-10-13, 0.55 mm (+ zone 2)"),
-        "{dl}"
+        header.contains("Least opening mm") && header.contains("Warmer block °C"),
+        "{header}"
     );
+    let sc = line("2", "2", "2024-09-20");
+    assert!(
+        sc.contains("0.41 < 0.50") && sc.contains("14.6 > 14.0"),
+        "{sc}"
+    );
+    assert!(sc.contains("✗ not groutable"), "{sc}");
+    assert!(sc.ends_with("opening, temperature"), "{sc}");
     let no = line("3", "2", "2024-10-05");
     assert!(
-        no.contains("0.20/0.30  12.2/13.0") && no.ends_with("no remedy found"),
+        no.contains("0.20 < 0.50") && no.contains("12.2 ≤ 14.0") && no.ends_with("age"),
         "{no}"
     );
     let mg = line("2", "1", "2024-09-15");
     assert!(
-        mg.contains("~ marginal ") && mg.ends_with("  aperture 0.62 mm below 0.70 mm"),
+        mg.contains("~ marginal ") && mg.ends_with("opening below 0.70 mm"),
         "{mg}"
     );
-    assert!(line("1", "2", "2024-09-10")
-        .trim_end()
-        .ends_with("✓ groutable"));
-    assert!(!t.contains("2024-08-01"), "history zone listed:\n{t}");
+    let ok = line("1", "2", "2024-09-10");
+    assert!(
+        ok.contains("12.8 ≤ 14.0") && ok.ends_with("✓ groutable"),
+        "{ok}"
+    );
+    // Nothing is cut: every reason and remedy in full below the table.
+    assert!(!t.contains('…'), "{t}");
+    for text in [
+        REASON_APERTURE_22,
+        REASON_TEMP_22,
+        REASON_APERTURE_31,
+        REASON_AGE_32,
+        "→ remedy: supercool 1.25 °C → 0.62 mm (verified marginal, 0.61 mm)",
+        "→ remedy: delay 12 d → 2024-10-13, 0.55 mm (+ zone 2) (verified marginal, 0.55 mm)",
+        "→ remedy: no remedy found\n    why: neither 3 °C of supercooling nor 60 days",
+    ] {
+        assert!(t.contains(text), "{text:?} missing:\n{t}");
+    }
+    // Re-openings of planned zones, the zones already grouted (no verdict),
+    // and the warnings.
+    assert!(
+        t.contains("joint 1 zone 2: grouted 2024-09-10, re-opens 2024-10-02 (22 days later)"),
+        "{t}"
+    );
+    assert!(
+        t.contains("Already grouted before 2024-09-01 (1 zone, history: no verdict):"),
+        "{t}"
+    );
+    assert!(t.contains("  J1 Z1 2024-08-01\n"), "{t}");
+    assert!(t.contains("joint 1 zone 1 (grouted 2024-08-01) re-opened 2024-08-20"));
+    assert!(t.contains(
+        "Warnings (1):\n  ! cooling.csv:12:4 (target_c): target 4.0 °C is below the closure"
+    ));
     assert_eq!(
         t.lines().last().unwrap(),
         "5 zones to grout: 3 flagged (not groutable), 1 marginal; 1 grouted before 2024-09-01 (1 re-opened)"
     );
-    // header, rule, 5 zones, summary
-    assert_eq!(t.lines().count(), 8);
+    insta::assert_snapshot!("terminal_table", t);
+
+    // Without warnings or re-openings there is no such block.
+    let plain = report::readiness_table(&fixture());
+    assert!(!plain.contains("Warnings") && !plain.contains("Re-open after"));
+}
+
+/// A remedy's verified run of joint 2 zone 2 from the as-of date to its
+/// new date, 2024-10-06, weekly: opening 0.45 → 0.70 mm, cooling 14.4 → 12.9 °C.
+fn verified_run() -> ZoneHistory {
+    let dates: Vec<NaiveDate> = (0..6)
+        .map(|i| date("2024-09-01") + chrono::Duration::days(7 * i))
+        .collect();
+    let v =
+        |a: f64, b: f64| -> Vec<Option<f64>> { (0..6).map(|i| Some(a + b * i as f64)).collect() };
+    ZoneHistory {
+        joint: 2,
+        zone: 2,
+        planned: date("2024-10-06"),
+        dates,
+        upstream: v(0.6, 0.05),
+        center: v(0.55, 0.05),
+        downstream: v(0.5, 0.05),
+        min: v(0.45, 0.05),
+        temperature: v(14.4, -0.3),
+    }
+}
+
+#[test]
+fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
+    let mut plan = fixture();
+    let z = plan
+        .zones
+        .iter_mut()
+        .find(|z| (z.joint, z.zone) == (2, 2))
+        .unwrap();
+    z.remedy.as_mut().unwrap().verified_history = Some(verified_run());
+    let z = z.clone();
+    let h = &plan.histories[1];
+    let doc = charts::zone_chart(h, Some(&z), &plan.settings);
+    balanced_tags(&doc);
+    // The minimum the aperture rule reads, the warmer block's temperature
+    // against the closure and the limit the temperature rule reads, and the
+    // remedy's run (opening and temperature) to its date.
+    for el in [
+        "<polyline class=\"min\"",
+        "<polyline class=\"temperature\"",
+        "<line class=\"closure\"",
+        "<line class=\"temperature-limit\"",
+        "<polyline class=\"remedy\"",
+        "<polyline class=\"remedy-temperature\"",
+        "<line class=\"remedy-date\"",
+    ] {
+        assert!(doc.contains(el), "{el} missing");
+    }
+    for text in [
+        ">warmer block [°C]</text>",
+        ">limit 14.0 °C = closure + tolerance</text>",
+        ">closure 13.0 °C</text>",
+        ">with the remedy (verified), grouted 2024-10-06</text>",
+        ">✗ not groutable: opening, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
+    ] {
+        assert!(doc.contains(text), "{text} missing");
+    }
+    // The remedy's run: its six dates, the first at 0.45 mm on the as-of date.
+    let pts = attr(&doc, "<polyline class=\"remedy\"", "points");
+    assert_eq!(pts.split(' ').count(), 6);
+    let r = verified_run();
+    let axes = charts::zone_axes(h, &plan.settings);
+    let first = pts.split(' ').next().unwrap();
+    let expect = format!(
+        "{},{}",
+        svg::px(axes.xd(date("2024-09-01"))),
+        svg::px(axes.ymm(0.45))
+    );
+    assert_eq!(first, expect);
+    // The limit line sits at 14.0 °C on the temperature panel's axes, below
+    // the aperture panel.
+    let t_axes = charts::temperature_axes(h, Some(&r), 13.0, 14.0);
+    let y = t_axes.ymm(14.0);
+    assert!(y > svg::FRAME.bottom && y < svg::TEMPERATURE_FRAME.bottom);
+    assert_eq!(
+        attr(&doc, "<line class=\"temperature-limit\"", "y1"),
+        svg::px(y)
+    );
+    assert_eq!(
+        attr(&doc, "<line class=\"closure\"", "y1"),
+        svg::px(t_axes.ymm(13.0))
+    );
+
+    // Without a verified run there is no remedy series.
+    let plain = charts::zone_chart(
+        h,
+        plan.zones.iter().find(|z| z.zone == 1 && z.joint == 3),
+        &plan.settings,
+    );
+    assert!(!plain.contains("class=\"remedy"), "no remedy drawn");
+}
+
+#[test]
+fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
+    let plan = fixture();
+    let mut z = plan.zones[3].clone();
+    z.checks.retain(|c| c.rule != Rule::Aperture);
+    z.remedy = None;
+    let doc = charts::zone_chart(&plan.histories[1], Some(&z), &plan.settings);
+    assert!(
+        doc.contains(">✗ not groutable: temperature</text>"),
+        "{doc}"
+    );
+    assert!(!doc.contains("not groutable: opening"));
+    // The terminal says the same, the opening passing its limit.
+    let mut p = fixture();
+    p.zones[3] = z;
+    p.zones[3].apertures_mm.min = Some(0.8);
+    let t = report::readiness_table(&p);
+    let row = t.lines().find(|l| l.contains("2024-09-20")).unwrap();
+    assert!(
+        row.contains("0.80 ≥ 0.50") && row.ends_with("temperature"),
+        "{row}"
+    );
 }

@@ -83,7 +83,15 @@ fn flagged_list_screen_and_enter_opens_the_zone() {
     let mut s = session(None, true);
     key(&mut s, KeyCode::Tab);
     assert_eq!(s.app.pane, Pane::Flagged);
-    insta::assert_snapshot!("flagged", screen(&s.app, 80, 24));
+    let text = screen(&s.app, 80, 24);
+    // Each flagged zone with the rules it fails and its remedy in brief.
+    assert!(text.contains("Fails") && text.contains("Remedy"), "{text}");
+    let j1z4 = text
+        .lines()
+        .find(|l| l.contains("    1    4 2024-09-13"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(j1z4.contains("supercool 1.25 °C"), "{j1z4}");
+    insta::assert_snapshot!("flagged", text);
     keys(&mut s, "jj");
     key(&mut s, KeyCode::Enter);
     let z = s.app.zone.as_ref().unwrap();
@@ -97,7 +105,22 @@ fn zone_detail_screen() {
     open(&mut s, 1, 4);
     let text = screen(&s.app, 80, 24);
     assert!(text.contains("supercool 1.25 °C"), "{text}");
+    // The rules in words: the zone below's order, the temperature's limit
+    // as closure + tolerance; the charts with the minimum, the remedy's
+    // verified run and the warmer block against the closure.
+    assert!(text.contains("zone below   grouted 36 d before"), "{text}");
+    assert!(text.contains("warmer block 14.5 °C, max 14.0"), "{text}");
+    assert!(text.contains("  = closure 13.0 + tolerance 1.0"), "{text}");
+    assert!(!text.contains("≥ 0 d"), "{text}");
     insta::assert_snapshot!("zone_detail", text);
+    let wide = screen(&s.app, 110, 30);
+    for name in ["min", "remedy", "warmer block", "closure 13.0", "limit 14"] {
+        assert!(wide.contains(name), "{name} missing:\n{wide}");
+    }
+    insta::assert_snapshot!("zone_detail_wide", wide);
+    // Narrower than the zone's header: it wraps rather than being cut.
+    let narrow = screen(&s.app, 60, 24);
+    assert!(narrow.contains("not groutable"), "{narrow}");
 }
 
 #[test]
@@ -211,8 +234,9 @@ fn whatif_can_be_cancelled_and_the_form_stays_usable() {
     let mut s = session(None, true);
     open(&mut s, 2, 4);
     keys(&mut s, "wj");
-    // A week later: a re-simulation from the checkpoint before that week.
-    key(&mut s, KeyCode::PageUp);
+    // A week later (PgDn: down the calendar): a re-simulation from the
+    // checkpoint before that week.
+    key(&mut s, KeyCode::PageDown);
     key(&mut s, KeyCode::Enter);
     assert!(s.app.running().is_some());
     keys(&mut s, "c");
@@ -419,13 +443,19 @@ fn whatif_fields_stay_within_the_site_limits() {
         key(&mut s, KeyCode::Left);
     }
     assert_eq!(form(&s).supercool_c, 0.0);
-    // The date: a day per arrow, a week per page, never before the as-of date.
+    // PgUp/PgDn are for the date only.
+    key(&mut s, KeyCode::PageDown);
+    assert_eq!(form(&s).supercool_c, 0.0);
+    // The date: a day per arrow, a week per page (PgDn later, PgUp
+    // earlier, as the keys line says), never before the as-of date.
     keys(&mut s, "j");
+    let text = screen(&s.app, 80, 24);
+    assert!(text.contains("PgUp/PgDn −/+ week"), "{text}");
     key(&mut s, KeyCode::Right);
-    key(&mut s, KeyCode::PageUp);
+    key(&mut s, KeyCode::PageDown);
     assert_eq!(form(&s).date, common::date(2024, 9, 21));
     for _ in 0..30 {
-        key(&mut s, KeyCode::PageDown);
+        key(&mut s, KeyCode::PageUp);
     }
     assert_eq!(form(&s).date, common::date(2024, 6, 1));
     // Nothing to save before a run.

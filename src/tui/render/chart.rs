@@ -1,6 +1,8 @@
-//! A zone's aperture (upstream, centre, downstream, with the 0.5 mm line and
-//! the planned date: the seed paper's Figs. 4–6) and temperature (against
-//! the closure temperature) over time, as terminal charts.
+//! A zone's aperture (upstream, centre, downstream and the minimum the rule
+//! reads, with the 0.5 mm line and the planned date: the seed paper's Figs.
+//! 4–6) and the warmer block's temperature (against the closure temperature
+//! and closure + tolerance, the limit the rule reads) over time, as terminal
+//! charts.
 
 use chrono::NaiveDate;
 use ratatui::buffer::Buffer;
@@ -31,6 +33,30 @@ impl Series {
             points,
             style: theme.series(i),
             marker: marker(theme, i),
+            scatter: false,
+        }
+    }
+}
+
+impl Series {
+    /// A curve in its own style: braille in colour, `glyph` without colour
+    /// (so it stays told apart from the numbered series).
+    pub fn own(
+        name: &'static str,
+        points: Vec<(f64, f64)>,
+        style: Style,
+        glyph: char,
+        theme: &Theme,
+    ) -> Series {
+        Series {
+            name,
+            points,
+            style,
+            marker: if theme.color {
+                Marker::Braille
+            } else {
+                Marker::Custom(glyph)
+            },
             scatter: false,
         }
     }
@@ -77,6 +103,7 @@ fn title_line(
                 Marker::Dot => "•".into(),
                 Marker::Block => "█".into(),
                 Marker::Bar => "▄".into(),
+                Marker::Custom(c) => c.to_string(),
                 _ => "⣿".into(),
             }
         };

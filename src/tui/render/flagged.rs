@@ -1,5 +1,6 @@
-//! The zones that are not groutable, by planned date, with the reasons and
-//! the remedy of the selected one in full below the table.
+//! The zones that are not groutable, by planned date, each with the rules
+//! it fails and its remedy in brief; the reasons and the remedy of the
+//! selected one in full below the table.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
@@ -7,7 +8,9 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Paragraph, Row, Table, Widget, Wrap};
 
 use super::Theme;
-use crate::report::words::{deciding_aperture, mm, opt, remedy_short, verified_words};
+use crate::report::words::{
+    deciding_aperture, failed_rules, mm, opt, remedy_brief, remedy_short, verified_words,
+};
 use crate::tui::app::App;
 use crate::tui::data::RunData;
 
@@ -50,12 +53,16 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
                 format!("{:>4}", z.zone),
                 z.planned.to_string(),
                 format!("{:>5}", opt(deciding_aperture(z, point), mm)),
-                z.reasons(),
+                failed_rules(z),
+                z.remedy
+                    .as_ref()
+                    .map_or("not searched".into(), remedy_brief),
             ])
             .style(style)
         })
         .collect();
-    let header = Row::new(vec!["Joint", "Zone", "Planned", "mm", "Why"]).style(theme.dim());
+    let header =
+        Row::new(vec!["Joint", "Zone", "Planned", "mm", "Fails", "Remedy"]).style(theme.dim());
     Table::new(
         rows,
         [
@@ -63,6 +70,7 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             Constraint::Length(4),
             Constraint::Length(10),
             Constraint::Length(5),
+            Constraint::Length(20),
             Constraint::Min(10),
         ],
     )

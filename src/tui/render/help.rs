@@ -8,7 +8,7 @@ use ratatui::widgets::{Block, Clear, Paragraph, Widget};
 use super::Theme;
 
 /// (where, keys, what they do).
-pub const KEYS: [(&str, &str, &str); 12] = [
+pub const KEYS: [(&str, &str, &str); 13] = [
     (
         "Everywhere",
         "Tab S-Tab",
@@ -25,7 +25,8 @@ pub const KEYS: [(&str, &str, &str); 12] = [
     ("Flagged", "↑↓ jk", "select · Enter open the zone"),
     ("Zone", "←↓↑→ hjkl", "next zone · w what-if · Esc back"),
     ("What-if", "↑↓ jk", "supercooling ΔT or grouting date"),
-    ("", "←→ hl - +", "change it (PgUp/PgDn: a week)"),
+    ("", "←→ hl - +", "change it: → more cooling, a later day"),
+    ("", "PgDn PgUp", "date a week later · a week earlier"),
     ("", "Enter", "re-simulate from the checkpoint"),
     ("", "c  Esc", "cancel the re-simulation"),
     ("", "s", "save the schedules as a CSV set"),

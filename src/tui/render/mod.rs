@@ -21,7 +21,7 @@ use ratatui::widgets::{Paragraph, Widget};
 
 use crate::report::summary::Summary;
 
-use super::app::{App, Pane};
+use super::app::{App, Field, Pane};
 pub use theme::Theme;
 
 impl Widget for &App {
@@ -142,9 +142,17 @@ fn keys_line(app: &App, theme: &Theme) -> Line<'static> {
                 Some(f) if f.running.is_some() => {
                     &[("c", "cancel"), ("Tab", "pane"), ("q", "quit")]
                 }
+                Some(f) if f.field == Field::Date => &[
+                    ("↑↓", "field"),
+                    ("←→", "−/+ day"),
+                    ("PgUp/PgDn", "−/+ week"),
+                    ("Enter", "re-simulate"),
+                    ("s", "save"),
+                    ("Esc", "close"),
+                ],
                 Some(_) => &[
                     ("↑↓", "field"),
-                    ("←→", "change"),
+                    ("←→", "less/more"),
                     ("Enter", "re-simulate"),
                     ("s", "save"),
                     ("Esc", "close"),

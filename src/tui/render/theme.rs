@@ -73,7 +73,17 @@ impl Theme {
         self.fg([Color::Cyan, Color::Green, Color::Magenta, Color::Yellow][i % 4])
     }
 
-    /// The limit lines (0.5 mm, closure temperature) and the planned date.
+    /// The curve the aperture rule reads (the zone's minimum).
+    pub fn min_curve(&self) -> Style {
+        self.fg(Color::White).add_modifier(Modifier::BOLD)
+    }
+
+    /// The remedy's verified run.
+    pub fn remedy(&self) -> Style {
+        self.fg(Color::LightBlue)
+    }
+
+    /// The limit lines (0.5 mm, closure + tolerance) and the planned date.
     pub fn limit(&self) -> Style {
         self.fg(Color::Red)
     }

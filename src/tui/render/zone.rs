@@ -1,6 +1,8 @@
-//! One zone: aperture and temperature charts on the left; the readiness
-//! rules and the plan's remedy on the right, or the what-if form with the
-//! plan's and the what-if's answers side by side.
+//! One zone: aperture and temperature charts on the left (the minimum the
+//! aperture rule reads, the warmer block against closure + tolerance as the
+//! temperature rule reads it, the remedy's verified run to its date); the
+//! readiness rules in words and the plan's remedy on the right, or the
+//! what-if form with the plan's and the what-if's answers side by side.
 
 use chrono::NaiveDate;
 use ratatui::buffer::Buffer;
@@ -12,10 +14,12 @@ use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
 use super::chart::{self, Series};
 use super::Theme;
 use crate::planner::whatif::WhatIfOutcome;
-use crate::planner::{MeterComparison, Rule, RuleCheck, Verdict, ZoneHistory, ZoneReadiness};
+use crate::planner::{
+    MeterComparison, RemedyChoice, Rule, RuleCheck, Verdict, ZoneHistory, ZoneReadiness,
+};
 use crate::report::words::{
-    deciding_aperture, max_block_temp, mm, opt, remedy_short, verdict_symbol, verdict_words,
-    verified_words,
+    deciding_aperture, max_block_temp, mm, opt, remedy_short, temperature_limit, verdict_symbol,
+    verdict_words, verified_words,
 };
 use crate::scene::PlannerSettings;
 use crate::tui::app::{App, Field, WhatIfForm, ZoneView};
@@ -28,8 +32,18 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             .render(area, buf);
         return;
     };
-    let [title, body] = Layout::vertical([Constraint::Length(1), Constraint::Min(0)]).areas(area);
-    render_title(view, data, theme, title, buf);
+    let title_line = title_line(view, data, theme);
+    // Wrapped onto a second line when the screen is too narrow for it.
+    let title_h = if title_line.width() > area.width as usize {
+        2
+    } else {
+        1
+    };
+    let [title, body] =
+        Layout::vertical([Constraint::Length(title_h), Constraint::Min(0)]).areas(area);
+    Paragraph::new(title_line)
+        .wrap(Wrap { trim: true })
+        .render(title, buf);
     let side_w = 36.min(area.width / 2);
     let [charts, side] =
         Layout::horizontal([Constraint::Min(20), Constraint::Length(side_w)]).areas(body);
@@ -40,7 +54,8 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
     }
 }
 
-fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+/// "Joint 1 zone 4 · lifts 10–12 · EL 27–36 m · planned 2024-09-13 · ✗ not groutable".
+fn title_line(view: &ZoneView, data: &RunData, theme: &Theme) -> Line<'static> {
     let mut spans = vec![Span::styled(
         format!("Joint {} zone {}", view.joint, view.zone),
         theme.title(),
@@ -55,7 +70,7 @@ fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
     if let Some(r) = &view.readiness {
         spans.push(Span::raw(" · "));
         if r.history {
-            spans.push(Span::styled("■ grouted", theme.dim()));
+            spans.push(Span::styled("■ already grouted", theme.dim()));
         } else {
             spans.push(Span::styled(
                 format!("{} {}", verdict_symbol(r.verdict), verdict_words(r.verdict)),
@@ -63,7 +78,7 @@ fn render_title(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
             ));
         }
     }
-    Paragraph::new(Line::from(spans)).render(area, buf);
+    Line::from(spans)
 }
 
 /// The aperture chart over the temperature chart, from the zone's first
@@ -83,6 +98,9 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
     }
     if let Some(r) = result {
         t1 = t1.max(r.what_if.date);
+    }
+    if let Some(r) = remedy_history(view) {
+        t1 = t1.max(r.planned);
     }
     let [top, bottom] =
         Layout::vertical([Constraint::Percentage(58), Constraint::Percentage(42)]).areas(area);
@@ -104,18 +122,35 @@ fn render_charts(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf
         .readiness
         .as_ref()
         .map_or(s.closure_temp_c, |r| r.closure_temp_c);
+    let limit = view
+        .readiness
+        .as_ref()
+        .map_or(closure + s.closure_tolerance_c, |r| temperature_limit(r, s));
+    // The limit only: a closure line a degree below it would share its
+    // terminal row at this height (the rules pane says closure + tolerance).
+    let temps = temperature_series(view, result, theme, t0);
     chart::render(
         "°C",
         "°C",
         t0,
         t1,
-        &temperature_series(h, result, theme, t0),
-        Some(("closure", closure)),
+        &temps,
+        Some(("limit", limit)),
         mark,
         theme,
         bottom,
         buf,
     );
+}
+
+/// The remedy's verified run of the zone, when the plan verified one.
+fn remedy_history(view: &ZoneView) -> Option<&ZoneHistory> {
+    view.readiness
+        .as_ref()
+        .and_then(|r| r.remedy.as_ref())
+        .filter(|r| r.choice != RemedyChoice::None)
+        .and_then(|r| r.verified_history.as_ref())
+        .filter(|h| !h.dates.is_empty())
 }
 
 /// The what-if's outcome, only while it is this zone's: the form keeps it
@@ -127,8 +162,9 @@ fn whatif_result(view: &ZoneView) -> Option<&WhatIfOutcome> {
         .filter(|r| (r.what_if.joint, r.what_if.zone) == (view.joint, view.zone))
 }
 
-/// The zone's three aperture points, the what-if's at the plan's deciding
-/// point, and the site's joint meters on this zone, as measured.
+/// The zone's three aperture points and the minimum, the remedy's and the
+/// what-if's at the plan's deciding point, and the site's joint meters on
+/// this zone, as measured.
 fn aperture_series(
     view: &ZoneView,
     data: &RunData,
@@ -143,6 +179,17 @@ fn aperture_series(
         .enumerate()
         .map(|(i, v)| Series::line(names[i], chart::points(h, t0, v), theme, i))
         .collect();
+    series.push(Series::own(
+        "min",
+        chart::points(h, t0, &h.min),
+        theme.min_curve(),
+        '▪',
+        theme,
+    ));
+    let point = data.run.plan.settings.aperture_point;
+    if let Some(r) = remedy_history(view) {
+        series.push(remedy_series(r, t0, r.series(point), theme));
+    }
     if let Some(r) = result {
         let v = r.history.series(data.run.plan.settings.aperture_point);
         series.push(Series::line(
@@ -167,19 +214,35 @@ fn aperture_series(
     series
 }
 
-/// The zone's mean temperature, and the what-if's.
+/// A series of the remedy's verified run, in its own style.
+fn remedy_series(r: &ZoneHistory, t0: NaiveDate, v: &[Option<f64>], theme: &Theme) -> Series {
+    Series::own(
+        "remedy",
+        chart::points(r, t0, v),
+        theme.remedy(),
+        '∘',
+        theme,
+    )
+}
+
+/// The warmer block's mean temperature over the zone (what the rule
+/// reads), the remedy's and the what-if's.
 fn temperature_series(
-    h: &ZoneHistory,
+    view: &ZoneView,
     result: Option<&WhatIfOutcome>,
     theme: &Theme,
     t0: NaiveDate,
 ) -> Vec<Series> {
+    let h = &view.history;
     let mut temps = vec![Series::line(
-        "zone",
+        "warmer block",
         chart::points(h, t0, &h.temperature),
         theme,
         1,
     )];
+    if let Some(r) = remedy_history(view) {
+        temps.push(remedy_series(r, t0, &r.temperature, theme));
+    }
     if let Some(r) = result {
         temps.push(Series::line(
             "what-if",
@@ -205,44 +268,67 @@ fn zone_meters<'a>(
         .filter(move |m| (m.joint, m.zone) == here)
 }
 
-/// "0.40 mm ≥ 0.50", "16.9 °C ≤ 13.5", … for a rule's value and limit.
-fn rule_text(c: &RuleCheck) -> (String, String) {
+/// A rule's name and its value against the limit, in words that fit the
+/// side panel: "opening 0.40 mm, min 0.50", "warmer block 14.5 °C, max
+/// 14.0", "zone below grouted 29 d after".
+fn rule_text(c: &RuleCheck) -> (&'static str, String) {
     let v = |f: &dyn Fn(f64) -> String| opt(c.value, f);
     match c.rule {
         Rule::Aperture => (
-            "aperture".into(),
-            format!("{} ≥ {} mm", v(&|x| mm(x)), mm(c.limit)),
+            "opening",
+            format!("{} mm, min {}", v(&|x| mm(x)), mm(c.limit)),
         ),
         Rule::Temperature => (
-            "temperature".into(),
-            format!("{} ≤ {:.1} °C", v(&|x| format!("{x:.1}")), c.limit),
+            "warmer block",
+            format!("{} °C, max {:.1}", v(&|x| format!("{x:.1}")), c.limit),
         ),
         Rule::Age => (
-            "age".into(),
-            format!("{} ≥ {:.0} d", v(&|x| format!("{x:.0}")), c.limit),
+            "age",
+            format!("{} d, min {:.0}", v(&|x| format!("{x:.0}")), c.limit),
         ),
-        Rule::Cover => (
-            "cover".into(),
-            format!("{} ≥ {:.1} m", v(&|x| format!("{x:.1}")), c.limit),
-        ),
+        Rule::Cover => match c.value {
+            Some(x) => ("cover", format!("{x:.1} m, min {:.1}", c.limit)),
+            None => ("cover", "both blocks complete".into()),
+        },
+        // The value is the days the zone below is grouted before this one.
         Rule::BottomUp => (
-            "bottom-up".into(),
-            format!("{} ≥ {:.0} d", v(&|x| format!("{x:.0}")), c.limit),
+            "zone below",
+            match c.value {
+                None if c.passed => "none: lowest zone".into(),
+                None => "has no grouting date".into(),
+                Some(d) if d > 0.0 => format!("grouted {d:.0} d before"),
+                Some(d) if d < 0.0 => format!("grouted {:.0} d after", -d),
+                Some(_) => "grouted the same day".into(),
+            },
         ),
     }
 }
 
-fn rule_lines<'a>(r: &ZoneReadiness, theme: &Theme) -> Vec<Line<'a>> {
-    r.checks
-        .iter()
-        .map(|c| {
-            let (name, text) = rule_text(c);
-            Line::from(vec![
-                Span::styled(if c.passed { "✓ " } else { "✗ " }, theme.pass(c.passed)),
-                Span::raw(format!("{name:<12}{text}")),
-            ])
-        })
-        .collect()
+fn rule_lines<'a>(r: &ZoneReadiness, s: &PlannerSettings, theme: &Theme) -> Vec<Line<'a>> {
+    let mut lines = Vec::new();
+    for c in &r.checks {
+        let (name, text) = rule_text(c);
+        // A zone grouted already gets no verdict: its values, not alarms.
+        let (mark, style) = match (r.history, c.passed) {
+            (true, _) => ("· ", theme.dim()),
+            (false, true) => ("✓ ", theme.pass(true)),
+            (false, false) => ("✗ ", theme.pass(false)),
+        };
+        lines.push(Line::from(vec![
+            Span::styled(mark, style),
+            Span::raw(format!("{name:<13}{text}")),
+        ]));
+        if c.rule == Rule::Temperature {
+            lines.push(Line::from(Span::styled(
+                format!(
+                    "  = closure {:.1} + tolerance {:.1}",
+                    r.closure_temp_c, s.closure_tolerance_c
+                ),
+                theme.dim(),
+            )));
+        }
+    }
+    lines
 }
 
 fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
@@ -255,11 +341,13 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
             ));
         }
         Some(r) => {
-            lines.push(Line::from(Span::styled(
-                format!("Rules on {}", r.planned),
-                theme.title(),
-            )));
-            lines.extend(rule_lines(r, theme));
+            let title = if r.history {
+                format!("Grouted {} · history", r.planned)
+            } else {
+                format!("Rules on {}", r.planned)
+            };
+            lines.push(Line::from(Span::styled(title, theme.title())));
+            lines.extend(rule_lines(r, &data.run.plan.settings, theme));
             let meters: Vec<_> = zone_meters(view, data).collect();
             if !meters.is_empty() {
                 let errors: Vec<f64> = meters
@@ -308,8 +396,9 @@ fn render_rules(view: &ZoneView, data: &RunData, theme: &Theme, area: Rect, buf:
         Span::styled("w", theme.key()),
         Span::raw(" what-if: supercool or move the date"),
     ]));
+    // Not trimmed: the indented line under a rule stays indented.
     Paragraph::new(lines)
-        .wrap(Wrap { trim: true })
+        .wrap(Wrap { trim: false })
         .block(Block::bordered().title(" Readiness "))
         .render(area, buf);
 }
