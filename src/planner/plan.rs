@@ -177,7 +177,7 @@ pub fn plan(
         stats: PlanStats {
             baseline_seconds,
             restarted_from,
-            resimulations: runner.resimulations().0,
+            resimulations: runner.resimulations(),
             resimulation_seconds: t_search.elapsed().as_secs_f64(),
             total_seconds: t0.elapsed().as_secs_f64(),
         },

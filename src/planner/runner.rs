@@ -2,7 +2,7 @@
 //! re-simulation of an edited schedule restarts from the latest checkpoint on
 //! or before the first date the edit changes.
 
-use std::time::Instant;
+use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -21,9 +21,9 @@ pub struct Runner<'a> {
     /// checkpoints of the baseline, by day
     pub checkpoints: Vec<Checkpoint>,
     pub history: History,
-    /// re-simulations run and their seconds (re-simulations may run on
-    /// several threads)
-    counters: std::sync::Mutex<(usize, f64)>,
+    /// re-simulations run (they may run on several threads; the plan
+    /// reports their wall time, measured around the whole search)
+    resimulations: AtomicUsize,
 }
 
 /// What one run should cover.
@@ -81,7 +81,7 @@ impl<'a> Runner<'a> {
             base,
             checkpoints,
             history,
-            counters: std::sync::Mutex::new((0, 0.0)),
+            resimulations: AtomicUsize::new(0),
         }
     }
 
@@ -100,7 +100,6 @@ impl<'a> Runner<'a> {
         cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<History, SimError> {
-        let t = Instant::now();
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
         sim.cancel = cancel;
         sim.set_end_day(span.end_day);
@@ -124,9 +123,7 @@ impl<'a> Runner<'a> {
             sim.restore(ck, &self.history);
         }
         sim.run(None, progress)?;
-        let mut c = self.counters.lock().unwrap_or_else(|e| e.into_inner());
-        c.0 += 1;
-        c.1 += t.elapsed().as_secs_f64();
+        self.resimulations.fetch_add(1, AtomicOrdering::Relaxed);
         Ok(sim.history())
     }
 
@@ -142,8 +139,8 @@ impl<'a> Runner<'a> {
         self.checkpoints.sort_by_key(|c| c.day);
     }
 
-    /// Re-simulations so far and their total seconds.
-    pub fn resimulations(&self) -> (usize, f64) {
-        *self.counters.lock().unwrap_or_else(|e| e.into_inner())
+    /// Re-simulations so far.
+    pub fn resimulations(&self) -> usize {
+        self.resimulations.load(AtomicOrdering::Relaxed)
     }
 }

@@ -770,7 +770,7 @@ fn fixture_with_warning_and_reopening() -> Plan {
     let mut plan = fixture();
     plan.warnings.push(groutready::schedule::Warning {
         file: "cooling.csv".into(),
-        line: 12,
+        line: Some(12),
         column: Some((4, "target_c".into())),
         message: "target 4.0 °C is below the closure temperature by more than 8 °C".into(),
     });
