@@ -28,6 +28,19 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
         .filter(|z| z["history"] == false && z["verdict"] == "not_groutable")
         .collect();
     assert!(!flagged.is_empty(), "the demo must flag zones");
+    // The demo's history obeys its own rules: every zone grouted before the
+    // as-of date was groutable on its date (its second stage cooled it to
+    // closure and held it there).
+    let history: Vec<String> = zones
+        .iter()
+        .filter(|z| z["history"] == true)
+        .map(|z| format!("J{} Z{} {}", z["joint"], z["zone"], z["verdict"]))
+        .collect();
+    assert_eq!(history.len(), 11);
+    assert!(
+        history.iter().all(|h| h.ends_with("\"groutable\"")),
+        "{history:?}"
+    );
     for z in &flagged {
         let a = z["apertures_mm"]["min"].as_f64().unwrap_or(0.0);
         let reasons: Vec<&str> = z["checks"]
