@@ -48,6 +48,17 @@ pub enum ThermalError {
     },
 }
 
+/// The step length t1 − t0 on a grid of 2⁻³⁶ d (1.3 µs). Days accumulated
+/// by repeated addition differ in their last bits (0.1 d steps give nine
+/// different differences near 0.1), and the factor cache is keyed by the
+/// exact bits of Δt: on the grid they are one length again. The change is
+/// below 1e-10 of any step and is used for the matrix and the right-hand
+/// side alike.
+pub fn step_length(t0: f64, t1: f64) -> f64 {
+    const GRID: f64 = (1u64 << 36) as f64;
+    ((t1 - t0) * GRID).round() / GRID
+}
+
 impl ThermalError {
     /// The unknown (in the live system's numbering) whose pivot failed.
     pub fn pivot_dof(&self) -> Option<usize> {
@@ -532,7 +543,7 @@ impl ThermalModel {
     /// submerged set are those of the step; stages ending by target are
     /// closed at t1.
     pub fn step(&mut self, t0: f64, t1: f64) -> Result<(), ThermalError> {
-        let dt = t1 - t0;
+        let dt = step_length(t0, t1);
         let fixed_value = self.prepare_system(t1, dt)?;
         let sources = self.sources(t0, t1);
         self.stats.pipe_terms += sources.pipe_terms;
@@ -664,7 +675,7 @@ impl ThermalModel {
         q: &[f64],
         fixed_value: &[f64],
     ) -> (StepRhs, Vec<f64>) {
-        let (sys, theta, dt) = (&self.sys, self.settings.theta, t1 - t0);
+        let (sys, theta, dt) = (&self.sys, self.settings.theta, step_length(t0, t1));
         let n = sys.n();
         // Air temperature weighted by θ over the step.
         let ta = self

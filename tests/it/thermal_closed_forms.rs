@@ -595,3 +595,26 @@ fn warm_water_and_unused_targets_are_recorded() {
         }
     ));
 }
+
+/// Fixed 0.1 d steps by accumulated addition (t += 0.1) give step lengths
+/// that differ in their last bits; they are one length for the factor
+/// cache: one numeric factorisation for 50 steps, not one per distinct bit
+/// pattern (nine before the step-length grid).
+#[test]
+fn accumulated_fixed_steps_share_one_factorisation() {
+    let sc = scene("\"hydration\"", &blocks_geometry(1, 6.0, 4.0, 1, 1, 1), "");
+    let mesh = blocks_mesh(&sc);
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![], None, None).unwrap();
+    th.pour(1, 1, 0.0, 15.0);
+    let mut t = 0.0f64;
+    let mut lengths = std::collections::BTreeSet::new();
+    for _ in 0..50 {
+        let t1 = t + 0.1;
+        lengths.insert((t1 - t).to_bits());
+        th.step(t, t1).unwrap();
+        t = t1;
+    }
+    assert!(lengths.len() > 3, "the raw lengths differ: {}", lengths.len());
+    assert_eq!(th.stats.numeric, 1);
+}
