@@ -68,7 +68,7 @@ pub fn wrap(text: &str, first: &str, rest: &str, width: usize) -> Vec<String> {
 fn why_cell(z: &ZoneReadiness, s: &PlannerSettings) -> String {
     match z.verdict {
         Verdict::Groutable => String::new(),
-        Verdict::Marginal => format!("opening below {} mm", words::mm(s.marginal_aperture_mm)),
+        Verdict::Marginal => format!("aperture below {} mm", words::mm(s.marginal_aperture_mm)),
         Verdict::NotGroutable => words::failed_rules(z),
     }
 }
@@ -76,17 +76,17 @@ fn why_cell(z: &ZoneReadiness, s: &PlannerSettings) -> String {
 /// The aperture column's header: which opening the rule reads.
 fn opening_header(point: ZonePoint) -> &'static str {
     match point {
-        ZonePoint::Min => "Least opening mm",
-        ZonePoint::Upstream => "Opening mm, up",
-        ZonePoint::Center => "Opening mm, ctr",
-        ZonePoint::Downstream => "Opening mm, down",
+        ZonePoint::Min => "Least aperture mm",
+        ZonePoint::Upstream => "Aperture mm, up",
+        ZonePoint::Center => "Aperture mm, ctr",
+        ZonePoint::Downstream => "Aperture mm, down",
     }
 }
 
 /// Widths of the fixed columns and the gaps before each column (numbers
 /// sit close; the verdict and the words get a wider gap to stand apart); the
 /// last column takes what is left of `LINE_WIDTH`.
-const W: [usize; 6] = [5, 4, 10, 16, 15, 15];
+const W: [usize; 6] = [5, 4, 10, 17, 15, 15];
 const GAP: [&str; 7] = ["", " ", " ", "  ", "  ", "  ", "  "];
 
 fn join(cells: [String; 7]) -> String {

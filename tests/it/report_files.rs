@@ -483,7 +483,7 @@ fn markdown_report_explains_flagged_zones_and_meters() {
     assert!(!flagged.contains("| 2 | 1 |") && !flagged.contains("| 1 | 2 |"));
     for (j, z) in [(2, 2), (3, 1), (3, 2)] {
         let link = format!(
-            "![Opening and temperature history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)"
+            "![Aperture and temperature history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)"
         );
         assert_eq!(flagged.matches(&link).count(), 1, "{link}");
         assert!(dir
@@ -492,7 +492,7 @@ fn markdown_report_explains_flagged_zones_and_meters() {
             .is_file());
     }
     assert_eq!(
-        md.matches("![Opening and temperature history").count(),
+        md.matches("![Aperture and temperature history").count(),
         3,
         "charts of flagged zones only"
     );
@@ -797,7 +797,7 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
     // (the temperature's is closure + tolerance, from the zone's check).
     let header = t.lines().next().unwrap();
     assert!(
-        header.contains("Least opening mm") && header.contains("Warmer block °C"),
+        header.contains("Least aperture mm") && header.contains("Warmer block °C"),
         "{header}"
     );
     let sc = line("2", "2", "2024-09-20");
@@ -806,7 +806,7 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         "{sc}"
     );
     assert!(sc.contains("✗ not groutable"), "{sc}");
-    assert!(sc.ends_with("opening, temperature"), "{sc}");
+    assert!(sc.ends_with("aperture, temperature"), "{sc}");
     let no = line("3", "2", "2024-10-05");
     assert!(
         no.contains("0.20 < 0.50") && no.contains("12.2 ≤ 14.0") && no.ends_with("age"),
@@ -814,7 +814,7 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
     );
     let mg = line("2", "1", "2024-09-15");
     assert!(
-        mg.contains("~ marginal ") && mg.ends_with("opening below 0.70 mm"),
+        mg.contains("~ marginal ") && mg.ends_with("aperture below 0.70 mm"),
         "{mg}"
     );
     let ok = line("1", "2", "2024-09-10");
@@ -914,7 +914,7 @@ fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
         ">limit 14.0 °C = closure + tolerance</text>",
         ">closure 13.0 °C</text>",
         ">with the remedy (verified), grouted 2024-10-06</text>",
-        ">✗ not groutable: opening, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
+        ">✗ not groutable: aperture, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
     ] {
         assert!(doc.contains(text), "{text} missing");
     }
@@ -964,7 +964,7 @@ fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
         doc.contains(">✗ not groutable: temperature</text>"),
         "{doc}"
     );
-    assert!(!doc.contains("not groutable: opening"));
+    assert!(!doc.contains("not groutable: aperture"));
     // The terminal says the same, the opening passing its limit.
     let mut p = fixture();
     p.zones[3] = z;
