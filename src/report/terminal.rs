@@ -74,12 +74,29 @@ fn wrap_tokens<'a>(
 }
 
 /// Why a zone is not plainly groutable, in a few words: the failed rules,
-/// or for a marginal zone the aperture against the marginal limit.
-fn why_cell(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+/// or for a marginal zone the aperture against the marginal limit; one
+/// token per rule, so a wrapped cell never splits "zone below".
+fn why_tokens(z: &ZoneReadiness, s: &PlannerSettings) -> Vec<String> {
     match z.verdict {
-        Verdict::Groutable => String::new(),
-        Verdict::Marginal => format!("aperture below {} mm", words::mm(s.marginal_aperture_mm)),
-        Verdict::NotGroutable => words::failed_rules(z),
+        Verdict::Groutable => Vec::new(),
+        Verdict::Marginal => vec![format!(
+            "aperture below {} mm",
+            words::mm(s.marginal_aperture_mm)
+        )],
+        Verdict::NotGroutable => {
+            let failed: Vec<&str> = z
+                .checks
+                .iter()
+                .filter(|c| !c.passed)
+                .map(|c| words::rule_words(c.rule))
+                .collect();
+            let n = failed.len();
+            failed
+                .iter()
+                .enumerate()
+                .map(|(i, w)| format!("{w}{}", if i + 1 < n { "," } else { "" }))
+                .collect()
+        }
     }
 }
 
@@ -131,7 +148,8 @@ fn table(out: &mut String, plan: &Plan) {
             words::verdict_words(z.verdict)
         );
         // The last column wraps under itself rather than being cut.
-        let why = wrap(&why_cell(z, s), "", "", why_width);
+        let why = why_tokens(z, s);
+        let why = wrap_tokens(why.iter().map(String::as_str), "", "", why_width);
         let row = [
             right(&z.joint.to_string(), W[0]),
             right(&z.zone.to_string(), W[1]),
