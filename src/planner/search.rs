@@ -14,7 +14,9 @@
 //!   on the same joint planned earlier than the new date move with it;
 //! - the cheaper remedy by the scene's cost weights is proposed, and all
 //!   proposals are applied together in a final run that re-checks every zone
-//!   still to grout.
+//!   still to grout and keeps each remedied zone's history in that run, from
+//!   the as-of date to its date with the remedy (`Remedy::verified_history`,
+//!   drawn by the charts).
 
 use std::collections::{BTreeMap, HashMap};
 

@@ -1,5 +1,5 @@
 //! `report.md`: the report an engineer reads. Summary and rules, the input
-//! warnings, the flagged zones with their reasons, remedy and chart (opening
+//! warnings, the flagged zones with their reasons, remedy and chart (aperture
 //! and temperature), the marginal zones, the zones that re-open after
 //! grouting, the zones already grouted (history, no verdict), the joint
 //! meters against the prediction, and a compact table of every zone still
@@ -87,7 +87,7 @@ fn flagged(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Opening mm (limit)",
+            "Aperture mm (limit)",
             "Reasons",
             "Remedy",
             "Verified",
@@ -143,7 +143,7 @@ fn flagged_zone(out: &mut String, plan: &Plan, z: &ZoneReadiness) {
     {
         let _ = writeln!(
             out,
-            "![Opening and temperature history of joint {}, zone {}](charts/{})\n",
+            "![Aperture and temperature history of joint {}, zone {}](charts/{})\n",
             z.joint,
             z.zone,
             zone_chart_file(z.joint, z.zone)
@@ -168,7 +168,7 @@ fn marginal(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Opening mm (limit)",
+            "Aperture mm (limit)",
             "Center mm",
             "Warmer block °C (limit)",
             "Why",
@@ -250,7 +250,7 @@ fn already_grouted(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Grouted",
-            "Least opening mm",
+            "Least aperture mm",
             "Warmer block °C",
             "Re-opened",
         ],
@@ -355,7 +355,7 @@ fn all_to_grout(out: &mut String, plan: &Plan) {
             "Joint",
             "Zone",
             "Planned",
-            "Opening mm (limit)",
+            "Aperture mm (limit)",
             "Center mm",
             "Warmer block °C (limit)",
             "Verdict",

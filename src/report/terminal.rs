@@ -43,10 +43,20 @@ fn right(s: &str, width: usize) -> String {
 /// first starting with `first` and the others with `rest` (prefixes written
 /// as given; a word longer than a line is left whole rather than cut).
 pub fn wrap(text: &str, first: &str, rest: &str, width: usize) -> Vec<String> {
+    wrap_tokens(text.split_whitespace(), first, rest, width)
+}
+
+/// [`wrap`] over tokens that must not be split (a token may hold spaces).
+fn wrap_tokens<'a>(
+    tokens: impl IntoIterator<Item = &'a str>,
+    first: &str,
+    rest: &str,
+    width: usize,
+) -> Vec<String> {
     let mut lines = Vec::new();
     let mut line = first.to_string();
     let mut empty = true;
-    for word in text.split_whitespace() {
+    for word in tokens {
         let sep = usize::from(!empty);
         let fits = line.chars().count() + sep + word.chars().count() <= width;
         if !empty && !fits {
@@ -64,29 +74,46 @@ pub fn wrap(text: &str, first: &str, rest: &str, width: usize) -> Vec<String> {
 }
 
 /// Why a zone is not plainly groutable, in a few words: the failed rules,
-/// or for a marginal zone the opening against the marginal limit.
-fn why_cell(z: &ZoneReadiness, s: &PlannerSettings) -> String {
+/// or for a marginal zone the aperture against the marginal limit; one
+/// token per rule, so a wrapped cell never splits "zone below".
+fn why_tokens(z: &ZoneReadiness, s: &PlannerSettings) -> Vec<String> {
     match z.verdict {
-        Verdict::Groutable => String::new(),
-        Verdict::Marginal => format!("opening below {} mm", words::mm(s.marginal_aperture_mm)),
-        Verdict::NotGroutable => words::failed_rules(z),
+        Verdict::Groutable => Vec::new(),
+        Verdict::Marginal => vec![format!(
+            "aperture below {} mm",
+            words::mm(s.marginal_aperture_mm)
+        )],
+        Verdict::NotGroutable => {
+            let failed: Vec<&str> = z
+                .checks
+                .iter()
+                .filter(|c| !c.passed)
+                .map(|c| words::rule_words(c.rule))
+                .collect();
+            let n = failed.len();
+            failed
+                .iter()
+                .enumerate()
+                .map(|(i, w)| format!("{w}{}", if i + 1 < n { "," } else { "" }))
+                .collect()
+        }
     }
 }
 
-/// The aperture column's header: which opening the rule reads.
-fn opening_header(point: ZonePoint) -> &'static str {
+/// The aperture column's header: which aperture the rule reads.
+fn aperture_header(point: ZonePoint) -> &'static str {
     match point {
-        ZonePoint::Min => "Least opening mm",
-        ZonePoint::Upstream => "Opening mm, up",
-        ZonePoint::Center => "Opening mm, ctr",
-        ZonePoint::Downstream => "Opening mm, down",
+        ZonePoint::Min => "Least aperture mm",
+        ZonePoint::Upstream => "Aperture mm, up",
+        ZonePoint::Center => "Aperture mm, ctr",
+        ZonePoint::Downstream => "Aperture mm, down",
     }
 }
 
 /// Widths of the fixed columns and the gaps before each column (numbers
 /// sit close; the verdict and the words get a wider gap to stand apart); the
 /// last column takes what is left of `LINE_WIDTH`.
-const W: [usize; 6] = [5, 4, 10, 16, 15, 15];
+const W: [usize; 6] = [5, 4, 10, 17, 15, 15];
 const GAP: [&str; 7] = ["", " ", " ", "  ", "  ", "  ", "  "];
 
 fn join(cells: [String; 7]) -> String {
@@ -107,7 +134,7 @@ fn table(out: &mut String, plan: &Plan) {
         right("Joint", W[0]),
         right("Zone", W[1]),
         left("Planned", W[2]),
-        right(opening_header(s.aperture_point), W[3]),
+        right(aperture_header(s.aperture_point), W[3]),
         right("Warmer block °C", W[4]),
         left("Verdict", W[5]),
         "Why".into(),
@@ -120,6 +147,9 @@ fn table(out: &mut String, plan: &Plan) {
             words::verdict_symbol(z.verdict),
             words::verdict_words(z.verdict)
         );
+        // The last column wraps under itself rather than being cut.
+        let why = why_tokens(z, s);
+        let why = wrap_tokens(why.iter().map(String::as_str), "", "", why_width);
         let row = [
             right(&z.joint.to_string(), W[0]),
             right(&z.zone.to_string(), W[1]),
@@ -127,9 +157,12 @@ fn table(out: &mut String, plan: &Plan) {
             right(&words::aperture_vs_limit(z, s), W[3]),
             right(&words::temperature_vs_limit(z, s), W[4]),
             left(&verdict, W[5]),
-            fit(&why_cell(z, s), why_width),
+            why[0].clone(),
         ];
         let _ = writeln!(out, "{}", join(row));
+        for more in &why[1..] {
+            let _ = writeln!(out, "{}{more}", " ".repeat(LINE_WIDTH - why_width));
+        }
     }
 }
 
@@ -220,11 +253,17 @@ fn already_grouted(out: &mut String, plan: &Plan) {
         plan.as_of,
         if n == 1 { "zone" } else { "zones" }
     );
+    let n = zones.len();
+    // One token per zone, so a line never breaks inside one.
     let list: Vec<String> = zones
         .iter()
-        .map(|z| format!("J{} Z{} {}", z.joint, z.zone, z.planned))
+        .enumerate()
+        .map(|(i, z)| {
+            let comma = if i + 1 < n { "," } else { "" };
+            format!("J{} Z{} {}{comma}", z.joint, z.zone, z.planned)
+        })
         .collect();
-    for l in wrap(&list.join(", "), "  ", "  ", LINE_WIDTH) {
+    for l in wrap_tokens(list.iter().map(String::as_str), "  ", "  ", LINE_WIDTH) {
         let _ = writeln!(out, "{l}");
     }
     for z in zones.iter().filter(|z| z.reopened.is_some()) {
@@ -281,5 +320,10 @@ mod tests {
             [" - aa bb", "   cc dd"]
         );
         assert_eq!(wrap("abcdefghij", "", "", 4), ["abcdefghij"]);
+        // A zone of the already-grouted list stays on one line.
+        assert_eq!(
+            wrap_tokens(["J1 Z1 05-01,", "J2 Z1 05-02"], "  ", "  ", 16),
+            ["  J1 Z1 05-01,", "  J2 Z1 05-02"]
+        );
     }
 }

@@ -95,7 +95,7 @@ pub fn temperature_vs_limit(z: &ZoneReadiness, s: &PlannerSettings) -> String {
 /// A rule in a site engineer's words, for a list of the failed ones.
 pub fn rule_words(rule: Rule) -> &'static str {
     match rule {
-        Rule::Aperture => "opening",
+        Rule::Aperture => "aperture",
         Rule::Temperature => "temperature",
         Rule::Age => "age",
         Rule::Cover => "cover",
@@ -103,7 +103,7 @@ pub fn rule_words(rule: Rule) -> &'static str {
     }
 }
 
-/// The failed rules in a few words: "opening, temperature".
+/// The failed rules in a few words: "aperture, temperature".
 pub fn failed_rules(z: &ZoneReadiness) -> String {
     z.checks
         .iter()

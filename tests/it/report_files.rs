@@ -30,6 +30,9 @@ const REASON_APERTURE_22: &str = "aperture 0.41 mm < 0.5 mm at the min point";
 const REASON_TEMP_22: &str = "block B 14.6 °C above closure 13.0 + 1.0 °C";
 const REASON_APERTURE_31: &str = "aperture 0.45 mm < 0.5 mm at the min point";
 const REASON_AGE_32: &str = "youngest lift 40 days old < 90 days";
+const REASON_APERTURE_32: &str = "aperture 0.20 mm at the min point is below 0.50 mm";
+const REASON_COVER_32: &str = "only 3.0 m of concrete above the zone on block 4, 6.0 m needed";
+const REASON_BELOW_32: &str = "zone 1 below is grouted later (2024-10-13)";
 const NOTE_22: &str = "supercooling costs 1.25 against 4.0 for the delay";
 const NOTE_32: &str = "neither 3 °C of supercooling nor 60 days of delay make it groutable";
 
@@ -483,7 +486,7 @@ fn markdown_report_explains_flagged_zones_and_meters() {
     assert!(!flagged.contains("| 2 | 1 |") && !flagged.contains("| 1 | 2 |"));
     for (j, z) in [(2, 2), (3, 1), (3, 2)] {
         let link = format!(
-            "![Opening and temperature history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)"
+            "![Aperture and temperature history of joint {j}, zone {z}](charts/zone_J{j}_Z{z}.svg)"
         );
         assert_eq!(flagged.matches(&link).count(), 1, "{link}");
         assert!(dir
@@ -492,7 +495,7 @@ fn markdown_report_explains_flagged_zones_and_meters() {
             .is_file());
     }
     assert_eq!(
-        md.matches("![Opening and temperature history").count(),
+        md.matches("![Aperture and temperature history").count(),
         3,
         "charts of flagged zones only"
     );
@@ -775,6 +778,13 @@ fn fixture_with_warning_and_reopening() -> Plan {
         message: "target 4.0 °C is below the closure temperature by more than 8 °C".into(),
     });
     plan.zones[1].reopened = Some(date("2024-10-02"));
+    // More failed rules than the console's last column holds on one line.
+    let hopeless = &mut plan.zones[5];
+    hopeless.checks.extend([
+        check(Rule::Aperture, 0.2, 0.5, Some(REASON_APERTURE_32)),
+        check(Rule::Cover, 3.0, 6.0, Some(REASON_COVER_32)),
+        check(Rule::BottomUp, -8.0, 0.0, Some(REASON_BELOW_32)),
+    ]);
     plan
 }
 
@@ -797,7 +807,7 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
     // (the temperature's is closure + tolerance, from the zone's check).
     let header = t.lines().next().unwrap();
     assert!(
-        header.contains("Least opening mm") && header.contains("Warmer block °C"),
+        header.contains("Least aperture mm") && header.contains("Warmer block °C"),
         "{header}"
     );
     let sc = line("2", "2", "2024-09-20");
@@ -806,15 +816,22 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         "{sc}"
     );
     assert!(sc.contains("✗ not groutable"), "{sc}");
-    assert!(sc.ends_with("opening, temperature"), "{sc}");
+    assert!(sc.ends_with("aperture, temperature"), "{sc}");
     let no = line("3", "2", "2024-10-05");
     assert!(
-        no.contains("0.20 < 0.50") && no.contains("12.2 ≤ 14.0") && no.ends_with("age"),
+        no.contains("0.20 < 0.50")
+            && no.contains("12.2 ≤ 14.0")
+            && no.ends_with("age, aperture, cover,"),
         "{no}"
     );
+    // The failed rules wrap under their column rather than being cut.
+    let below = t.lines().skip_while(|l| *l != no).nth(1).unwrap();
+    assert_eq!(below.trim_start(), "zone below");
+    let column = no[..no.find("age").unwrap()].chars().count();
+    assert_eq!(below.chars().take_while(|&c| c == ' ').count(), column);
     let mg = line("2", "1", "2024-09-15");
     assert!(
-        mg.contains("~ marginal ") && mg.ends_with("opening below 0.70 mm"),
+        mg.contains("~ marginal ") && mg.ends_with("aperture below 0.70 mm"),
         "{mg}"
     );
     let ok = line("1", "2", "2024-09-10");
@@ -829,6 +846,8 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
         REASON_TEMP_22,
         REASON_APERTURE_31,
         REASON_AGE_32,
+        REASON_COVER_32,
+        REASON_BELOW_32,
         "→ remedy: supercool 1.25 °C → 0.62 mm (verified marginal, 0.61 mm)",
         "→ remedy: delay 12 d → 2024-10-13, 0.55 mm (+ zone 2) (verified marginal, 0.55 mm)",
         "→ remedy: no remedy found\n    why: neither 3 °C of supercooling nor 60 days",
@@ -914,7 +933,7 @@ fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
         ">limit 14.0 °C = closure + tolerance</text>",
         ">closure 13.0 °C</text>",
         ">with the remedy (verified), grouted 2024-10-06</text>",
-        ">✗ not groutable: opening, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
+        ">✗ not groutable: aperture, temperature · remedy supercool 1.25 °C → 0.62 mm</text>",
     ] {
         assert!(doc.contains(text), "{text} missing");
     }
@@ -964,7 +983,7 @@ fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
         doc.contains(">✗ not groutable: temperature</text>"),
         "{doc}"
     );
-    assert!(!doc.contains("not groutable: opening"));
+    assert!(!doc.contains("not groutable: aperture"));
     // The terminal says the same, the opening passing its limit.
     let mut p = fixture();
     p.zones[3] = z;

@@ -8,13 +8,10 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Paragraph, Row, Table, Widget, Wrap};
 
 use super::Theme;
-use crate::report::words::{
-    deciding_aperture, failed_rules, mm, opt, remedy_brief, remedy_short, verified_words,
-};
+use crate::report::words::{failed_rules, remedy_brief, remedy_short, verified_words};
 use crate::tui::app::App;
-use crate::tui::data::RunData;
 
-pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Buffer) {
+pub fn render(app: &App, theme: &Theme, area: Rect, buf: &mut Buffer) {
     let flagged = app.flagged();
     let [table_area, detail] =
         Layout::vertical([Constraint::Min(4), Constraint::Length(7)]).areas(area);
@@ -31,7 +28,6 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             .render(area, buf);
         return;
     }
-    let point = data.run.plan.settings.aperture_point;
     let rows_vis = table_area.height.saturating_sub(3) as usize;
     let first = if rows_vis == 0 {
         0
@@ -52,7 +48,6 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
                 format!("{:>5}", z.joint),
                 format!("{:>4}", z.zone),
                 z.planned.to_string(),
-                format!("{:>5}", opt(deciding_aperture(z, point), mm)),
                 failed_rules(z),
                 z.remedy
                     .as_ref()
@@ -61,16 +56,16 @@ pub fn render(app: &App, data: &RunData, theme: &Theme, area: Rect, buf: &mut Bu
             .style(style)
         })
         .collect();
-    let header =
-        Row::new(vec!["Joint", "Zone", "Planned", "mm", "Fails", "Remedy"]).style(theme.dim());
+    // No aperture column: the rules that fail and the remedy are what the
+    // list is read for (the values are in the detail below).
+    let header = Row::new(vec!["Joint", "Zone", "Planned", "Fails", "Remedy"]).style(theme.dim());
     Table::new(
         rows,
         [
             Constraint::Length(5),
             Constraint::Length(4),
             Constraint::Length(10),
-            Constraint::Length(5),
-            Constraint::Length(20),
+            Constraint::Length(28),
             Constraint::Min(10),
         ],
     )

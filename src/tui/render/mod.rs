@@ -59,7 +59,7 @@ impl Widget for &App {
         render_tabs(self, &theme, s.flagged, tabs, buf);
         match self.pane {
             Pane::Overview => overview::render(self, data, &theme, body, buf),
-            Pane::Flagged => flagged::render(self, data, &theme, body, buf),
+            Pane::Flagged => flagged::render(self, &theme, body, buf),
             Pane::Zone => zone::render(self, data, &theme, body, buf),
         }
         render_status(self, &theme, status, buf);

@@ -269,13 +269,13 @@ fn zone_meters<'a>(
 }
 
 /// A rule's name and its value against the limit, in words that fit the
-/// side panel: "opening 0.40 mm, min 0.50", "warmer block 14.5 °C, max
+/// side panel: "aperture 0.40 mm, min 0.50", "warmer block 14.5 °C, max
 /// 14.0", "zone below grouted 29 d after".
 fn rule_text(c: &RuleCheck) -> (&'static str, String) {
     let v = |f: &dyn Fn(f64) -> String| opt(c.value, f);
     match c.rule {
         Rule::Aperture => (
-            "opening",
+            "aperture",
             format!("{} mm, min {}", v(&|x| mm(x)), mm(c.limit)),
         ),
         Rule::Temperature => (
