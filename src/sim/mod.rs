@@ -19,7 +19,7 @@ use crate::scene::{Effect, Scene};
 use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
 use crate::thermal::boundary::{AirTemperature, Series, Water};
 use crate::thermal::cooling::PlannedStage;
-use crate::thermal::{ThermalError, ThermalModel, ThermalStats};
+use crate::thermal::{ThermalError, ThermalModel, ThermalStats, WARM_WATER_MARGIN_C};
 use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 
 pub use checkpoint::{Checkpoint, History};
@@ -417,21 +417,26 @@ impl<'a> Simulation<'a> {
                 7,
                 "water_temp_c",
                 format!(
-                    "water at {} °C is not colder than {} when the stage started on {} (mean {mean:.1} °C): the pipes warmed the concrete",
+                    "water at {} °C is more than {WARM_WATER_MARGIN_C} °C warmer than {} when the stage started on {} (mean {mean:.1} °C): the pipes warmed the concrete",
                     st.water_temp_c,
                     region(st),
                     epoch.date(Day::containing(st.start_day)),
                 ),
             )
         });
-        let unused = th.unused_targets().map(|st| {
+        let unused = th.unused_targets(self.day).map(|(st, ended)| {
+            let what = if ended {
+                "ran until the next stage on the lift started"
+            } else {
+                "still runs"
+            };
             Warning::cell(
                 COOLING_CSV,
                 st.line,
                 8,
                 "target_temp_c",
                 format!(
-                    "{} was never warmer than the target {} °C while this stage ran: the target had no effect and the stage ran to its end date",
+                    "{} was never warmer than the target {} °C while this stage ran, and the stage has no end date: it {what}",
                     region(st),
                     st.target_temp_c.unwrap_or(f64::NAN)
                 ),

@@ -34,5 +34,8 @@ pub mod model;
 pub mod settings;
 
 pub use ledger::HeatLedger;
-pub use model::{ThermalCheckpoint, ThermalError, ThermalModel, ThermalState, ThermalStats};
+pub use model::{
+    ThermalCheckpoint, ThermalError, ThermalModel, ThermalState, ThermalStats, UNUSED_TARGET_DAYS,
+    WARM_WATER_MARGIN_C,
+};
 pub use settings::{RockThermal, ThermalMaterial, ThermalSettings};

@@ -48,6 +48,15 @@ pub enum ThermalError {
     },
 }
 
+/// Water warmer than the cooled region by more than this when its stage
+/// starts is a warning: the pipes then warm the concrete markedly (a few
+/// degrees above it is the "holding" water of an intermediate stage).
+pub const WARM_WATER_MARGIN_C: f64 = 3.0;
+
+/// A stage without an end date still waiting for its region to rise above
+/// its target this many days after it started is a warning.
+pub const UNUSED_TARGET_DAYS: f64 = 30.0;
+
 /// The step length t1 − t0 on a grid of 2⁻³⁶ d (1.3 µs). Days accumulated
 /// by repeated addition differ in their last bits (0.1 d steps give nine
 /// different differences near 0.1), and the factor cache is keyed by the
@@ -107,8 +116,8 @@ pub struct ThermalState {
     pub status: Vec<StageStatus>,
     /// heat gained so far, by source
     pub ledger: HeatLedger,
-    /// stages whose water was not colder than their region's mean when they
-    /// started (the pipes warmed the concrete): (stage, mean at start °C)
+    /// stages whose water was warmer than their region's mean by more than
+    /// [`WARM_WATER_MARGIN_C`] when they started: (stage, mean at start °C)
     #[serde(default)]
     pub warm_water: Vec<(usize, f64)>,
 }
@@ -283,7 +292,7 @@ impl ThermalModel {
                         self.lift_stage.insert((st.block, lift), i);
                     }
                     let armed = st.target_temp_c.is_some_and(|target| t0_mean > target);
-                    if st.water_temp_c >= t0_mean {
+                    if st.water_temp_c > t0_mean + WARM_WATER_MARGIN_C {
                         self.state.warm_water.push((i, t0_mean));
                     }
                     self.state.status[i] = StageStatus::Active {
@@ -332,22 +341,37 @@ impl ThermalModel {
             .map(|&(i, t)| (&self.stages[i], t))
     }
 
-    /// The stages that ended with a target that had no effect: their
-    /// region was never warmer than it while they ran.
-    pub fn unused_targets(&self) -> impl Iterator<Item = &PlannedStage> {
+    /// The stages without an end date whose target never came into play:
+    /// their region was never warmer than the target, so they ran until a
+    /// later stage on the lift started (`true`), or still run at `day`,
+    /// [`UNUSED_TARGET_DAYS`] or more after they started (`false`). A stage
+    /// with an end date whose target is never reached just runs its planned
+    /// length, which is what its row says.
+    pub fn unused_targets(&self, day: f64) -> impl Iterator<Item = (&PlannedStage, bool)> {
         self.stages
             .iter()
             .zip(&self.state.status)
-            .filter(|(_, s)| {
-                matches!(
-                    s,
-                    StageStatus::Done {
-                        target_unused: true,
-                        ..
-                    }
-                )
+            .filter(|(st, _)| st.end_day.is_none() && st.target_temp_c.is_some())
+            .enumerate()
+            .filter_map(move |(i, (st, status))| match *status {
+                StageStatus::Done {
+                    target_unused: true,
+                    ..
+                } => Some((st, true)),
+                StageStatus::Active {
+                    armed: false,
+                    start_day,
+                    ..
+                } => {
+                    // A later stage on its lifts took over (the stage stays
+                    // Active in name, with no lift left to cool).
+                    let superseded = (st.lift_from..=st.lift_to)
+                        .all(|l| self.lift_stage.get(&(st.block, l)) != Some(&i));
+                    (superseded || day - start_day >= UNUSED_TARGET_DAYS)
+                        .then_some((st, superseded))
+                }
+                _ => None,
             })
-            .map(|(st, _)| st)
     }
 
     /// Capacity-weighted mean temperature of a stage's region.
@@ -427,8 +451,21 @@ impl ThermalModel {
                     .map_or(StageStatus::Pending, |s| (*s).clone())
             })
             .collect();
+        // Stage indices differ between edited schedules: carry the warm-water
+        // findings over by the stage's key, like the statuses.
+        let warm_water = ck
+            .state
+            .warm_water
+            .iter()
+            .filter_map(|&(i, mean)| {
+                let k = key(ck.stages.get(i)?);
+                let j = self.stages.iter().position(|st| key(st) == k)?;
+                Some((j, mean))
+            })
+            .collect();
         self.state = ThermalState {
             status,
+            warm_water,
             ..ck.state.clone()
         };
         self.lift_pour_day = ck

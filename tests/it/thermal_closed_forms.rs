@@ -548,9 +548,11 @@ fn submerged_upstream_nodes_take_the_water_temperature_at_their_depth() {
     assert!((t - water.temperature(end, 0.0)).abs() > 1e-6);
 }
 
-/// A stage whose water is warmer than the concrete, with a target the
-/// concrete never exceeds: the model records both (the run's warnings), and
-/// a stage on concrete warmer than its water and target records neither.
+/// A stage without an end date whose water is warmer than the concrete
+/// (by more than the margin) and whose target the concrete never exceeds:
+/// the model records both (the run's warnings) once a later stage takes
+/// over; the later stage, on concrete warmer than its target, records
+/// neither.
 #[test]
 fn warm_water_and_unused_targets_are_recorded() {
     let sc = scene(
@@ -559,20 +561,26 @@ fn warm_water_and_unused_targets_are_recorded() {
         PIPES,
     );
     let mesh = blocks_mesh(&sc);
-    let stage = |start_day: f64, water_temp_c: f64, target: f64, line: usize| PlannedStage {
-        block: 1,
-        lift_from: 1,
-        lift_to: 1,
-        start_day,
-        end_day: Some(start_day + 10.0),
-        water_temp_c,
-        target_temp_c: Some(target),
-        line,
+    let stage = |start_day: f64, end: Option<f64>, water_temp_c: f64, target: f64, line: usize| {
+        PlannedStage {
+            block: 1,
+            lift_from: 1,
+            lift_to: 1,
+            start_day,
+            end_day: end,
+            water_temp_c,
+            target_temp_c: Some(target),
+            line,
+        }
     };
     let thermal = ThermalSettings::from_scene(&sc);
     // Placed at 15 °C: 20 °C water warms it, and it never exceeds 25 °C
-    // while that stage runs; then 8 °C water with a 12 °C target cools it.
-    let stages = vec![stage(5.0, 20.0, 25.0, 4), stage(20.0, 8.0, 12.0, 5)];
+    // while that stage runs; on day 20, 8 °C water with a 12 °C target
+    // takes over.
+    let stages = vec![
+        stage(5.0, None, 20.0, 25.0, 4),
+        stage(20.0, Some(30.0), 8.0, 12.0, 5),
+    ];
     let mut th = ThermalModel::new(&mesh, &thermal, stages, None, None).unwrap();
     th.pour(1, 1, 0.0, 15.0);
     let mut t = 0.0;
@@ -580,13 +588,17 @@ fn warm_water_and_unused_targets_are_recorded() {
         th.update_stages(t);
         th.step(t, t + 1.0).unwrap();
         t += 1.0;
+        if t == 19.0 {
+            // Running, unarmed, 14 days old: not yet a warning.
+            assert_eq!(th.unused_targets(t).count(), 0);
+        }
     }
     let warm: Vec<(usize, f64)> = th.warm_water().map(|(s, m)| (s.line, m)).collect();
     assert_eq!(warm.len(), 1, "{warm:?}");
     assert_eq!(warm[0].0, 4);
     assert!((warm[0].1 - 15.0).abs() < 1e-9, "{warm:?}");
-    let unused: Vec<usize> = th.unused_targets().map(|s| s.line).collect();
-    assert_eq!(unused, [4]);
+    let unused: Vec<(usize, bool)> = th.unused_targets(t).map(|(s, e)| (s.line, e)).collect();
+    assert_eq!(unused, [(4, true)]);
     assert!(matches!(
         th.state.status[1],
         StageStatus::Done {
@@ -615,6 +627,10 @@ fn accumulated_fixed_steps_share_one_factorisation() {
         th.step(t, t1).unwrap();
         t = t1;
     }
-    assert!(lengths.len() > 3, "the raw lengths differ: {}", lengths.len());
+    assert!(
+        lengths.len() > 3,
+        "the raw lengths differ: {}",
+        lengths.len()
+    );
     assert_eq!(th.stats.numeric, 1);
 }
