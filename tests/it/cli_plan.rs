@@ -163,6 +163,15 @@ fn apply(dir: &Path, edit: &Edit) {
 #[test]
 fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
     use Edit::*;
+    let x = "x".repeat(10_000_000);
+    let long_line: &str = Box::leak(format!("{x}\n").into_boxed_str());
+    let long_line_error: &str = Box::leak(
+        format!(
+            "pours.csv:1: expected header \"block,lift,pour_date,placement_temp_c\", found \"{}… (10000000 characters)\"",
+            &x[..120]
+        )
+        .into_boxed_str(),
+    );
     let cases: Vec<(Edit, &str)> = vec![
         (
             Line("pours.csv", 2, "3,1,31/01/2024,17.9"),
@@ -202,6 +211,12 @@ fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
             "joint_meters.csv:2:3 (point): expected one of upstream, center, downstream, min, found \"middle\"",
         ),
         (Remove("pours.csv"), "pours.csv: required file not found in"),
+        // A 10 MB one-line file: the message quotes 120 characters of it.
+        (Write("pours.csv", long_line), long_line_error),
+        (
+            Append("reservoir.csv", "2025-06-01,1500"),
+            "reservoir.csv:4:2 (level_m): expected a level at most 66 m (the dam's crest is at 60 m, its base at 0 m), found \"1500\"",
+        ),
     ];
     assert!(cases.len() >= 15);
     let mut failures = Vec::new();
@@ -219,7 +234,8 @@ fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr).into_owned();
-        if o.status.code() != Some(1) || !err.contains(expected) {
+        // No message quotes a whole file (the 10 MB line above).
+        if o.status.code() != Some(1) || !err.contains(expected) || err.len() > 1_000 {
             failures.push(format!("case {i}: exit {:?}: {err}", o.status.code()));
         }
         assert_eq!(
