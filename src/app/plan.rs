@@ -118,6 +118,31 @@ pub fn plan(
         .chain(questionable);
     warnings.splice(0..0, all);
 
+    let checkpoints_kept = write_folder(inputs, dest, &out_plan, as_of, prev_dir.as_deref())?;
+    Ok(PlanSummary {
+        out: out.path().to_path_buf(),
+        remedied: out_plan.remedied.is_some(),
+        newly_flagged: out_plan
+            .newly_flagged
+            .iter()
+            .map(|z| (z.zone_id(), z.reasons()))
+            .collect(),
+        plan: out_plan.plan,
+        checkpoints_kept,
+    })
+}
+
+/// Writes the run folder of a finished plan atomically (staged, then renamed
+/// over `dest`); returns the number of checkpoints kept. `previous` is the
+/// run folder the plan restarted from, whose older checkpoints are copied.
+fn write_folder(
+    inputs: &Inputs,
+    dest: &Path,
+    out_plan: &planner::PlanOutput,
+    as_of: NaiveDate,
+    previous: Option<&Path>,
+) -> Result<usize, AppError> {
+    let (scene, epoch) = (&inputs.scene, inputs.scene.epoch);
     let staging = RunDir::create(dest).map_err(io_err(dest))?;
     let dir = staging.path();
     crate::report::write_all(dir, &out_plan.plan)?;
@@ -150,21 +175,11 @@ pub fn plan(
         h,
         &out_plan.checkpoints,
         keep_from,
-        prev_dir.as_deref(),
+        previous,
     )?;
     restart::save_plan(dir, scene, &out_plan.plan)?;
     let p = dir.join("run.txt");
     std::fs::write(&p, run_text(inputs, &out_plan.baseline)).map_err(io_err(&p))?;
     staging.commit().map_err(io_err(dest))?;
-    Ok(PlanSummary {
-        out: out.path().to_path_buf(),
-        remedied: out_plan.remedied.is_some(),
-        newly_flagged: out_plan
-            .newly_flagged
-            .iter()
-            .map(|z| (z.zone_id(), z.reasons()))
-            .collect(),
-        plan: out_plan.plan,
-        checkpoints_kept,
-    })
+    Ok(checkpoints_kept)
 }
