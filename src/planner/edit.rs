@@ -64,10 +64,11 @@ pub const MIN_WATER_C: f64 = 4.0;
 /// - a stage that ends (by its end date) before the grouting date is followed
 ///   by an `extra` stage from its end, or from `from` if it ended earlier, to
 ///   the grouting date;
-/// - a stage that started before `from` and runs past the grouting date
-///   cannot be supercooled without rewriting its past (Zhu's equivalent
-///   pipe-cooling function would restart: a colder-water step inside a
-///   running stage needs superposition, not a new row).
+/// - a stage that started before `from` and runs past the grouting date is
+///   split at `from`: its row ends there, and a row continuing it carries
+///   the colder water and lower target (the stage's clock is kept: Zhu's
+///   superposition, see `schedule`'s cooling rows), to the later of its end
+///   and the grouting date.
 ///
 /// Returns the edited schedules and the zones none of whose lifts could be
 /// edited.
@@ -80,18 +81,12 @@ pub fn supercool(
     // row → (ΔT, latest grouting date, from)
     let mut per_row: BTreeMap<usize, (f64, NaiveDate, NaiveDate)> = BTreeMap::new();
     let mut not_editable = Vec::new();
-    let editable = |c: &CoolingStage, from: NaiveDate, until: NaiveDate| {
-        c.start >= from || c.end.is_some_and(|e| e < until)
-    };
     for z in zones.iter().filter(|z| z.delta_c > 0.0) {
         let mut any = false;
         for (block, lift) in cooled_lifts(layout, z, lifts_above) {
             let Some(row) = stage_to_edit(&schedules.cooling, block, lift, z.planned) else {
                 continue;
             };
-            if !editable(&schedules.cooling[row], z.from, z.planned) {
-                continue;
-            }
             any = true;
             let e = per_row.entry(row).or_insert((0.0, z.planned, z.from));
             e.0 = e.0.max(z.delta_c);
@@ -115,24 +110,92 @@ pub fn supercool(
             c.target_temp_c = Some(target);
             c.water_temp_c = water;
             c.end = c.end.map(|end| end.max(until));
-        } else if let Some(start) = c
-            .end
-            .filter(|&e| e < until)
-            .map(|e| e.max(from))
-            .filter(|&s| s < until)
-        {
-            extra.push(CoolingStage {
-                stage: crate::schedule::Stage::Extra,
-                start,
-                end: Some(until),
+        } else if let Some(end) = c.end.filter(|&e| e < until) {
+            let start = end.max(from);
+            if start < until {
+                extra.push(CoolingStage {
+                    stage: crate::schedule::Stage::Extra,
+                    start,
+                    end: Some(until),
+                    water_temp_c: water,
+                    target_temp_c: Some(target),
+                    ..c.clone()
+                });
+            }
+        } else {
+            // Running past the grouting date: colder water from `from`.
+            let rest = CoolingStage {
+                start: from,
+                end: c.end.map(|e| e.max(until)),
                 water_temp_c: water,
                 target_temp_c: Some(target),
                 ..c.clone()
-            });
+            };
+            c.end = Some(from);
+            extra.push(rest);
         }
     }
     out.cooling.extend(extra);
     (out, not_editable)
+}
+
+type StageKey = (u32, u32, u32, u8, NaiveDate);
+
+/// A stage over time: from each of its rows' start, the water and target
+/// bits in effect; and its end.
+#[derive(PartialEq)]
+struct Profile {
+    steps: Vec<(NaiveDate, u64, Option<u64>)>,
+    end: Option<NaiveDate>,
+}
+
+fn stage_profiles(s: &Schedules) -> BTreeMap<StageKey, Profile> {
+    let rows = &s.cooling;
+    crate::schedule::cooling_chains(rows)
+        .into_iter()
+        .map(|chain| {
+            let head = &rows[chain[0]];
+            let key = (
+                head.block,
+                head.lift_from,
+                head.lift_to,
+                head.stage as u8,
+                head.start,
+            );
+            let steps = chain
+                .iter()
+                .map(|&r| {
+                    let c = &rows[r];
+                    (
+                        c.start,
+                        c.water_temp_c.to_bits(),
+                        c.target_temp_c.map(f64::to_bits),
+                    )
+                })
+                .collect();
+            let end = rows[chain[chain.len() - 1]].end;
+            (key, Profile { steps, end })
+        })
+        .collect()
+}
+
+/// The first date two profiles of one stage differ: where the water or
+/// target in effect first differs, or the earlier end when the ends differ
+/// (the stage runs alike until then).
+fn profile_change(a: &Profile, b: &Profile) -> Option<NaiveDate> {
+    let in_effect =
+        |p: &Profile, d: NaiveDate| p.steps.iter().rev().find(|s| s.0 <= d).map(|s| (s.1, s.2));
+    let mut dates: Vec<NaiveDate> = a.steps.iter().chain(&b.steps).map(|s| s.0).collect();
+    dates.sort();
+    let mut first = dates
+        .into_iter()
+        .find(|&d| in_effect(a, d) != in_effect(b, d));
+    if a.end != b.end {
+        // one of them is a date (a missing end never ends)
+        let end = a.end.into_iter().chain(b.end).min();
+        first = first.into_iter().chain(end).min();
+    }
+    first
 }
 
 /// Moves the grouting of zones to new dates.
@@ -178,38 +241,17 @@ pub fn first_change(a: &Schedules, b: &Schedules) -> Option<NaiveDate> {
     };
     diff_maps(&grout(a), &grout(b), |x| *x, &mut at);
 
-    // A stage is its block, lifts, kind and start; the rest may change.
-    type StageKey = (u32, u32, u32, u8, NaiveDate);
-    let stages = |s: &Schedules| -> BTreeMap<StageKey, (Option<NaiveDate>, u64, Option<u64>)> {
-        s.cooling
-            .iter()
-            .map(|c| {
-                (
-                    (c.block, c.lift_from, c.lift_to, c.stage as u8, c.start),
-                    (
-                        c.end,
-                        c.water_temp_c.to_bits(),
-                        c.target_temp_c.map(f64::to_bits),
-                    ),
-                )
-            })
-            .collect()
-    };
-    let (sa, sb) = (stages(a), stages(b));
-    for (k, va) in &sa {
+    // A stage is its first row's block, lifts, kind and start; its water,
+    // targets and end may change, inside it too (rows continuing it).
+    let (sa, sb) = (stage_profiles(a), stage_profiles(b));
+    for (k, pa) in &sa {
         match sb.get(k) {
             None => at(k.4),
-            Some(vb) if vb == va => {}
-            Some(vb) if vb.1 == va.1 && vb.2 == va.2 => {
-                // only the end moved: the stage runs alike until the earlier end
-                let end = match (va.0, vb.0) {
-                    (Some(x), Some(y)) => x.min(y),
-                    (Some(x), None) | (None, Some(x)) => x,
-                    (None, None) => k.4,
-                };
-                at(end.max(k.4));
+            Some(pb) => {
+                if let Some(d) = profile_change(pa, pb) {
+                    at(d.max(k.4));
+                }
             }
-            Some(_) => at(k.4),
         }
     }
     for k in sb.keys().filter(|k| !sa.contains_key(k)) {

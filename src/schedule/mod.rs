@@ -47,7 +47,14 @@
 //!   date. A stage without an end date runs until its target is reached; a
 //!   later stage on the same lift may start while it runs, and that start ends
 //!   it (an implicit end, not an overlap). Two stages of the same lift may not
-//!   start on the same day.
+//!   start on the same day;
+//! - **a water change inside a running stage** is written as the stage split
+//!   at the change date: a row with the same block, lifts and stage as a row
+//!   that ends on its start date *continues* that row. It is the same cooling
+//!   with new water from its start date: the stage's clock is kept (Zhu's
+//!   superposition: the region's mean gains δ·[1 − φ(t − t₁)] for a change δ
+//!   at t₁), where an unrelated new stage would restart it. Each row's
+//!   target applies while that row runs.
 //!
 //! `grouting.csv` (optional for now): `joint,zone,planned_date[,status]`
 //! - one row per (joint, zone), no duplicates;
@@ -196,6 +203,33 @@ impl CoolingStage {
     pub fn covers(&self, block: u32, lift: u32) -> bool {
         self.block == block && self.lift_from <= lift && lift <= self.lift_to
     }
+
+    /// Whether `next` continues this row: the same cooling (block, lifts,
+    /// stage) with new water from this row's end date.
+    pub fn continued_by(&self, next: &CoolingStage) -> bool {
+        (self.block, self.lift_from, self.lift_to, self.stage)
+            == (next.block, next.lift_from, next.lift_to, next.stage)
+            && self.end == Some(next.start)
+    }
+}
+
+/// The cooling rows grouped into stages: each chain lists the rows of one
+/// stage in time order (a row, then the rows continuing it, see
+/// [`CoolingStage::continued_by`]), chains in the order of their first row.
+pub fn cooling_chains(cooling: &[CoolingStage]) -> Vec<Vec<usize>> {
+    let continues = |i: usize| cooling.iter().any(|c| c.continued_by(&cooling[i]));
+    let mut chains = Vec::new();
+    for head in (0..cooling.len()).filter(|&i| !continues(i)) {
+        let mut chain = vec![head];
+        // Bounded: every step moves to a later start date.
+        while let Some(next) = (0..cooling.len())
+            .find(|&j| cooling[*chain.last().unwrap_or(&head)].continued_by(&cooling[j]))
+        {
+            chain.push(next);
+        }
+        chains.push(chain);
+    }
+    chains
 }
 
 /// Planned grouting date of one zone of one joint.

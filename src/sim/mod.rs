@@ -18,7 +18,7 @@ use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene};
 use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
 use crate::thermal::boundary::{AirTemperature, Series, Water};
-use crate::thermal::cooling::PlannedStage;
+use crate::thermal::cooling::{PlannedStage, StageChange};
 use crate::thermal::{ThermalError, ThermalModel, ThermalStats, WARM_WATER_MARGIN_C};
 use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 
@@ -601,18 +601,29 @@ fn check_memory(scene: &Scene, mesh: &Mesh) -> Result<(), SimError> {
 /// The cooling stages of `cooling.csv` as the thermal model runs them.
 fn planned_stages(epoch: Epoch, schedules: &Schedules) -> Vec<PlannedStage> {
     let day = |d: NaiveDate| epoch.t(d);
-    schedules
-        .cooling
-        .iter()
-        .map(|c| PlannedStage {
-            block: c.block,
-            lift_from: c.lift_from,
-            lift_to: c.lift_to,
-            start_day: day(c.start),
-            end_day: c.end.map(day),
-            water_temp_c: c.water_temp_c,
-            target_temp_c: c.target_temp_c,
-            line: c.line,
+    let rows = &schedules.cooling;
+    crate::schedule::cooling_chains(rows)
+        .into_iter()
+        .map(|chain| {
+            let (head, last) = (&rows[chain[0]], &rows[chain[chain.len() - 1]]);
+            PlannedStage {
+                block: head.block,
+                lift_from: head.lift_from,
+                lift_to: head.lift_to,
+                start_day: day(head.start),
+                end_day: last.end.map(day),
+                water_temp_c: head.water_temp_c,
+                target_temp_c: head.target_temp_c,
+                line: head.line,
+                changes: chain[1..]
+                    .iter()
+                    .map(|&r| StageChange {
+                        day: day(rows[r].start),
+                        water_temp_c: rows[r].water_temp_c,
+                        target_temp_c: rows[r].target_temp_c,
+                    })
+                    .collect(),
+            }
         })
         .collect()
 }

@@ -5,7 +5,12 @@
 //!   H(s) = ∫_0^s φ(s − u) θ'(τ_k + u) du,
 //! where s is time since the stage started, T0 the region's mean temperature
 //! at the start, Tw the water temperature and τ_k the lift's age at the start.
-//! Hydration is inside H, so θ' is not added again. Outside a stage the
+//! Hydration is inside H, so θ' is not added again. A water change inside
+//! the stage, from Tw to Tw + δ at day c (a row continuing the stage in
+//! cooling.csv), keeps the stage's clock: by superposition the mean gains
+//! δ·[1 − φ(t − c)], so each step after c adds −δ[φ(t1 − c) − φ(t0 − c)]
+//! (`tests/it/thermal_closed_forms.rs`: an insulated block whose water
+//! drops 4 °C on day 15 follows it to 1.4e-15). Outside a stage the
 //! source is the adiabatic increment θ(τ1) − θ(τ0) alone. A stage ends at its
 //! end date or at the first step end where the region's mean temperature has
 //! fallen to its target: the target check is armed once the mean has been
@@ -24,10 +29,41 @@ pub struct PlannedStage {
     pub lift_to: u32,
     pub start_day: f64,
     pub end_day: Option<f64>,
+    /// water temperature from the start [°C]
     pub water_temp_c: f64,
     pub target_temp_c: Option<f64>,
-    /// cooling.csv line, for messages.
+    /// cooling.csv line, for messages (of the stage's first row).
     pub line: usize,
+    /// changes inside the stage, in time order: the rows continuing the
+    /// first (see [`crate::schedule::cooling_chains`]); the stage's clock
+    /// is kept
+    #[serde(default)]
+    pub changes: Vec<StageChange>,
+}
+
+/// New water (and target) from `day` inside a running stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StageChange {
+    pub day: f64,
+    pub water_temp_c: f64,
+    pub target_temp_c: Option<f64>,
+}
+
+impl PlannedStage {
+    /// The target in effect on `day` (that of the last change on or before
+    /// it, else the stage's own).
+    pub fn target_on(&self, day: f64) -> Option<f64> {
+        self.changes
+            .iter()
+            .rev()
+            .find(|c| c.day <= day)
+            .map_or(self.target_temp_c, |c| c.target_temp_c)
+    }
+
+    /// The water changes, (day, new water temperature).
+    pub fn water_changes(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.changes.iter().map(|c| (c.day, c.water_temp_c))
+    }
 }
 
 /// Progress of one stage; plain data so it can be checkpointed.
@@ -72,6 +108,8 @@ pub struct ActiveStage<'a> {
     pub start_day: f64,
     pub t0_mean: f64,
     pub water_temp_c: f64,
+    /// changes of water inside the stage, in time order
+    pub changes: &'a [StageChange],
 }
 
 /// The increment of one lift over the step [t0, t1] (t0 ≥ pour day).
@@ -87,7 +125,16 @@ pub fn lift_increment(input: &LiftSourceInput<'_>, t0: f64, t1: f64) -> LiftIncr
         Some(st) => {
             let s0 = (t0 - st.start_day).max(0.0);
             let s1 = (t1 - st.start_day).max(0.0);
-            let pipe_part = (st.t0_mean - st.water_temp_c) * (st.pipe.phi(s1) - st.pipe.phi(s0));
+            let mut pipe_part =
+                (st.t0_mean - st.water_temp_c) * (st.pipe.phi(s1) - st.pipe.phi(s0));
+            // Superposition of each water change δ at day c: the mean gains
+            // δ·[1 − φ(t − c)], so the step's source gains −δ·Δφ after c.
+            let mut water = st.water_temp_c;
+            for c in st.changes {
+                let (c0, c1) = ((t0 - c.day).max(0.0), (t1 - c.day).max(0.0));
+                pipe_part -= (c.water_temp_c - water) * (st.pipe.phi(c1) - st.pipe.phi(c0));
+                water = c.water_temp_c;
+            }
             let heat_part = match input.rise {
                 Some(r) => {
                     let tau_k = (st.start_day - input.pour_day).max(0.0);

@@ -51,7 +51,7 @@ pub enum ThermalError {
 /// Water warmer than the cooled region by more than this when its stage
 /// starts is a warning: the pipes then warm the concrete markedly (a few
 /// degrees above it is the "holding" water of an intermediate stage).
-pub const WARM_WATER_MARGIN_C: f64 = 3.0;
+pub const WARM_WATER_MARGIN_C: f64 = 5.0;
 
 /// A stage without an end date still waiting for its region to rise above
 /// its target this many days after it started is a warning.
@@ -291,7 +291,7 @@ impl ThermalModel {
                     for lift in st.lift_from..=st.lift_to {
                         self.lift_stage.insert((st.block, lift), i);
                     }
-                    let armed = st.target_temp_c.is_some_and(|target| t0_mean > target);
+                    let armed = st.target_on(day).is_some_and(|target| t0_mean > target);
                     if st.water_temp_c > t0_mean + WARM_WATER_MARGIN_C {
                         self.state.warm_water.push((i, t0_mean));
                     }
@@ -651,6 +651,7 @@ impl ThermalModel {
                 start_day: *start_day,
                 t0_mean: *t0_mean,
                 water_temp_c: self.stages[i].water_temp_c,
+                changes: &self.stages[i].changes,
             }),
             _ => None,
         }
@@ -847,7 +848,7 @@ impl ThermalModel {
     fn end_stages_at_target(&mut self, day: f64) {
         for i in 0..self.stages.len() {
             let (StageStatus::Active { armed, .. }, Some(target)) =
-                (self.state.status[i].clone(), self.stages[i].target_temp_c)
+                (self.state.status[i].clone(), self.stages[i].target_on(day))
             else {
                 continue;
             };

@@ -185,3 +185,86 @@ fn restart_before_an_edit_equals_the_edited_run_from_scratch() {
         "the edit changed apertures by only {changed:e}"
     );
 }
+
+/// Supercooling a running stage splits its row at the as-of date into a
+/// row continuing it with colder water (issue 15). The schedules first
+/// differ on that date, not at the stage's start, and a run restarted from
+/// the checkpoint before it equals the edited run from scratch.
+#[test]
+fn a_water_change_inside_a_running_stage_restarts_at_its_date() {
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    let zone = ZoneId::new(2, 2);
+    let planned = inputs.schedules.grouting_of(zone).unwrap().planned;
+    let from = inputs.scene.epoch.date(Day(150));
+    let layout = app::dam_layout(&inputs.mesh);
+    let (edited, missing) = edit::supercool(
+        &inputs.schedules,
+        &layout,
+        &[edit::Supercool {
+            zone,
+            delta_c: 2.0,
+            planned,
+            from,
+        }],
+        0,
+    );
+    assert!(missing.is_empty());
+    groutready::schedule::validate(&edited).unwrap();
+    // The zone's second stages were running on day 150: each is now two rows.
+    let continued = edited
+        .cooling
+        .iter()
+        .filter(|c| edited.cooling.iter().any(|a| a.continued_by(c)))
+        .count();
+    assert!(continued >= 2, "{continued} rows continue a stage");
+    assert_eq!(edit::first_change(&inputs.schedules, &edited), Some(from));
+    let ck = base
+        .checkpoints
+        .iter()
+        .rev()
+        .find(|c| c.day <= Day(150))
+        .expect("a checkpoint before the edit")
+        .clone();
+    let scratch = run(&inputs, &edited, None);
+    let restarted = run(&inputs, &edited, Some((&ck, &base.history())));
+    let (diff, days, labels, dt) = compare(&scratch.history(), &restarted.history(), ck.day);
+    println!("water change on {from}, restart at {}: {days} days, aperture diff {diff:e}, temperature diff {dt:e} °C", ck.day);
+    assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
+    assert_eq!(labels, 0);
+    assert!(dt <= 1e-9);
+    // The past is untouched: before the change the runs agree exactly.
+    let (before, ..) = compare(&base.history(), &scratch.history(), Day(0));
+    let (after, ..) = compare(&base.history(), &scratch.history(), Day(150));
+    println!("edited against the base: {before:e} over all days, {after:e} from day 150");
+    let t_base = &base.history().zone_temps;
+    let t_new = &scratch.history().zone_temps;
+    let bits = |r: &(Day, Vec<[f64; 2]>)| -> Vec<u64> {
+        r.1.iter().flatten().map(|v| v.to_bits()).collect()
+    };
+    for (ra, rb) in t_base
+        .rows
+        .iter()
+        .zip(&t_new.rows)
+        .filter(|(r, _)| r.0 < Day(150))
+    {
+        assert_eq!(
+            bits(ra),
+            bits(rb),
+            "day {:?} changed before the water did",
+            ra.0
+        );
+    }
+    // ...and the colder water cooled the zone.
+    let cooler = t_base
+        .rows
+        .iter()
+        .zip(&t_new.rows)
+        .filter(|(r, _)| r.0 > Day(170))
+        .any(|(a, b)| {
+            a.1.iter()
+                .zip(&b.1)
+                .any(|(x, y)| (x[0] - y[0]).max(x[1] - y[1]) > 0.3)
+        });
+    assert!(cooler, "the colder water must cool the zone by day 170+");
+}

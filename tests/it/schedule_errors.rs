@@ -770,3 +770,23 @@ fn the_shipped_schedules_raise_no_warning() {
         );
     }
 }
+
+/// A row with the same block, lifts and stage as a row ending on its start
+/// date continues that stage with new water (its clock kept): the two rows
+/// are one stage, and an unrelated row on another day is not.
+#[test]
+fn a_row_continuing_a_stage_is_a_water_change_inside_it() {
+    let dir = with_line("cooling.csv", "1,1,3,second,2025-04-15,2025-05-01,6,11");
+    let s = load(dir.path()).unwrap();
+    let chains = groutready::schedule::cooling_chains(&s.cooling);
+    let lines = |chain: &Vec<usize>| chain.iter().map(|&i| s.cooling[i].line).collect::<Vec<_>>();
+    let long: Vec<Vec<usize>> = chains.iter().filter(|c| c.len() > 1).map(lines).collect();
+    assert_eq!(long, [vec![5, 8]]);
+    assert_eq!(chains.len(), s.cooling.len() - 1);
+    // A day later it is a new stage of its own.
+    let dir = with_line("cooling.csv", "1,1,3,second,2025-04-16,2025-05-01,6,11");
+    let s = load(dir.path()).unwrap();
+    assert!(groutready::schedule::cooling_chains(&s.cooling)
+        .iter()
+        .all(|c| c.len() == 1));
+}

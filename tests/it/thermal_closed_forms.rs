@@ -8,7 +8,7 @@ use groutready::scene::{Air, Effect};
 use groutready::schedule::{CoolingStage, Pour, Schedules, Stage};
 use groutready::sim::Simulation;
 use groutready::thermal::boundary::AirTemperature;
-use groutready::thermal::cooling::{PlannedStage, StageStatus};
+use groutready::thermal::cooling::{PlannedStage, StageChange, StageStatus};
 use groutready::thermal::{ThermalModel, ThermalSettings};
 
 const PIPES: &str = r#"
@@ -101,6 +101,7 @@ fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
             water_temp_c: 10.0,
             target_temp_c: None,
             line: 2,
+            changes: vec![],
         },
         PlannedStage {
             block: 1,
@@ -111,6 +112,7 @@ fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
             water_temp_c: 8.0,
             target_temp_c: None,
             line: 3,
+            changes: vec![],
         },
     ];
     let pipe = ZhuPipe::new(
@@ -180,6 +182,7 @@ fn a_stage_ends_when_its_target_is_reached() {
         water_temp_c: 8.0,
         target_temp_c: Some(30.0),
         line: 2,
+        changes: vec![],
     };
     let thermal = ThermalSettings::from_scene(&sc);
     let mut th = ThermalModel::new(&mesh, &thermal, vec![stage], None, None).unwrap();
@@ -571,14 +574,15 @@ fn warm_water_and_unused_targets_are_recorded() {
             water_temp_c,
             target_temp_c: Some(target),
             line,
+            changes: vec![],
         }
     };
     let thermal = ThermalSettings::from_scene(&sc);
-    // Placed at 15 °C: 20 °C water warms it, and it never exceeds 25 °C
+    // Placed at 15 °C: 21 °C water warms it, and it never exceeds 25 °C
     // while that stage runs; on day 20, 8 °C water with a 12 °C target
     // takes over.
     let stages = vec![
-        stage(5.0, None, 20.0, 25.0, 4),
+        stage(5.0, None, 21.0, 25.0, 4),
         stage(20.0, Some(30.0), 8.0, 12.0, 5),
     ];
     let mut th = ThermalModel::new(&mesh, &thermal, stages, None, None).unwrap();
@@ -633,4 +637,87 @@ fn accumulated_fixed_steps_share_one_factorisation() {
         lengths.len()
     );
     assert_eq!(th.stats.numeric, 1);
+}
+
+/// Colder water inside a running stage (issue 15): an insulated block whose
+/// stage's water drops from 10 to 6 °C on day 15 without restarting the
+/// stage's clock follows Zhu's superposition,
+///   T(t) = Tw + (T0 − Tw)φ(t) + H(t) − δ·[1 − φ(t − 15)]   (t > 15, δ = 4),
+/// to 1e-6; restarting the clock (a new stage from day 15) gives a
+/// different history, so the test would catch it.
+#[test]
+fn a_water_change_inside_a_stage_follows_zhu_superposition() {
+    let mut sc = scene(
+        "\"hydration\", \"pipe_cooling\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
+        PIPES,
+    );
+    let rise = AdiabaticRise::Exponential {
+        theta0: 25.0,
+        m: 0.35,
+    };
+    sc.concrete.adiabatic = Some(rise.clone());
+    let mesh = blocks_mesh(&sc);
+    let stage = PlannedStage {
+        block: 1,
+        lift_from: 1,
+        lift_to: 1,
+        start_day: 0.0,
+        end_day: Some(60.0),
+        water_temp_c: 10.0,
+        target_temp_c: None,
+        line: 2,
+        changes: vec![StageChange {
+            day: 15.0,
+            water_temp_c: 6.0,
+            target_temp_c: None,
+        }],
+    };
+    let pipe = ZhuPipe::new(
+        sc.pipes.as_ref().unwrap(),
+        sc.concrete_diffusivity_m2_per_day(),
+        sc.concrete.conductivity_w_mk,
+    );
+    let thermal = ThermalSettings::from_scene(&sc);
+    let mut th = ThermalModel::new(&mesh, &thermal, vec![stage], None, None).unwrap();
+    let t_place = 16.0;
+    th.pour(1, 1, 0.0, t_place);
+    th.update_stages(0.0);
+    let exact = |t: f64| {
+        let kept =
+            10.0 + (t_place - 10.0) * pipe.phi(t) + hydration_under_cooling(&pipe, &rise, 0.0, t);
+        if t <= 15.0 {
+            kept
+        } else {
+            kept - 4.0 * (1.0 - pipe.phi(t - 15.0))
+        }
+    };
+    // The old way: a new stage from day 15 with 6 °C water and a fresh clock.
+    let t15 = exact(15.0);
+    let restarted = |t: f64| {
+        6.0 + (t15 - 6.0) * pipe.phi(t - 15.0)
+            + hydration_under_cooling(&pipe, &rise, 15.0, t - 15.0)
+    };
+    let (mut t, mut max_rel, mut apart) = (0.0, 0.0f64, 0.0f64);
+    while t < 60.0 {
+        let t1 = if t < 2.0 { t + 0.25 } else { t + 1.0 };
+        th.step(t, t1).unwrap();
+        th.update_stages(t1);
+        let got = th.lift_mean(1, 1).unwrap();
+        max_rel = max_rel.max((got - exact(t1)).abs() / exact(t1).abs());
+        if t1 > 15.0 {
+            apart = apart.max((exact(t1) - restarted(t1)).abs());
+        }
+        t = t1;
+    }
+    eprintln!("water change: max relative error {max_rel:.2e}; restart differs by {apart:.3} °C");
+    assert!(max_rel <= 1e-6, "max relative error {max_rel:.2e}");
+    assert!(
+        apart > 0.1,
+        "superposition and restart must differ ({apart} °C)"
+    );
+    // The change really cooled: 4 °C colder water, most of it felt by day 60.
+    let warmer =
+        10.0 + (t_place - 10.0) * pipe.phi(60.0) + hydration_under_cooling(&pipe, &rise, 0.0, 60.0);
+    assert!(warmer - exact(60.0) > 2.0, "{} vs {}", warmer, exact(60.0));
 }

@@ -252,6 +252,25 @@ fn plan_in(name: &str, args: &[&str], from_crate: bool) -> Planned {
     Planned { root, out, output }
 }
 
+/// The small dam planned from 15 July 2024, while the second stages of the
+/// September zones run (their supercooling is a water change inside them).
+pub fn small_plan_running() -> &'static Planned {
+    static P: std::sync::OnceLock<Planned> = std::sync::OnceLock::new();
+    P.get_or_init(|| {
+        plan_in(
+            "small_plan_running",
+            &[
+                "models/small_dam_joints.toml",
+                "--as-of",
+                "2024-07-15",
+                "--horizon-days",
+                "60",
+            ],
+            true,
+        )
+    })
+}
+
 /// The README's main command, `groutready plan` with no arguments, run from
 /// an empty folder (the demo is found next to the program's sources).
 pub fn demo_plan() -> &'static Planned {
