@@ -31,6 +31,12 @@ const INPUTS: &str = "inputs";
 const SCENE: &str = "scene.json";
 const PLAN: &str = "plan.bin";
 
+/// The layout of the postcard files (checkpoints, history, plan): postcard
+/// is positional, so a file written before a field was added would decode
+/// into the wrong fields. Bump it with any change of a type they hold.
+/// 2: cooling stages with water changes, warnings in the thermal state.
+const FORMAT: u32 = 2;
+
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.
 pub fn fingerprint(scene: &Scene) -> String {
@@ -43,7 +49,10 @@ pub fn fingerprint(scene: &Scene) -> String {
         h ^= b as u64;
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
-    format!("groutready {} scene {h:016x}\n", env!("CARGO_PKG_VERSION"))
+    format!(
+        "groutready {} format {FORMAT} scene {h:016x}\n",
+        env!("CARGO_PKG_VERSION")
+    )
 }
 
 fn ck_name(day: Day) -> String {

@@ -160,13 +160,13 @@ pub fn run(
         not_applied: match applied {
             Applied::Yes => None,
             Applied::OnlyAbove => Some(format!(
-                "only the lifts above were supercooled: the zone's own cooling stage \
-                 started before {as_of} and runs past {} (or has no target)",
+                "only the lifts above were supercooled: the zone's own lifts have no \
+                 cooling stage with a target starting before {}",
                 w.date
             )),
             Applied::No => Some(format!(
-                "nothing supercooled: every cooling stage of the zone started before \
-                 {as_of} and runs past {} (or has no target)",
+                "nothing supercooled: no lift of the zone has a cooling stage with a \
+                 target starting before {} (from {as_of})",
                 w.date
             )),
         },
