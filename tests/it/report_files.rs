@@ -914,6 +914,8 @@ fn zone_chart_draws_minimum_temperature_against_its_limit_and_the_remedy() {
     let h = &plan.histories[1];
     let doc = charts::zone_chart(h, Some(&z), &plan.settings);
     balanced_tags(&doc);
+    // The whole chart, to review any change of it by eye.
+    insta::assert_snapshot!("zone_chart_svg", doc);
     // The minimum the aperture rule reads, the warmer block's temperature
     // against the closure and the limit the temperature rule reads, and the
     // remedy's run (opening and temperature) to its date.
