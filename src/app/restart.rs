@@ -133,7 +133,7 @@ pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Day) 
     let latest = good.pop();
     for (path, e) in &bad {
         let instead = latest.as_ref().map(|c| (c.day, scene.epoch.date(c.day)));
-        found.damaged.push(damaged(path, e, Some(instead)));
+        found.damaged.push(damaged(path, e, instead));
     }
     found.previous = latest.map(|checkpoint| Previous {
         restart: Restart {
@@ -160,18 +160,17 @@ fn read_checkpoint(path: &Path) -> Result<Checkpoint, CheckpointError> {
 }
 
 /// The warning for a damaged restart file; `instead` is the checkpoint used
-/// in its place (`Some(None)`: none left, from scratch; `None`: the history
-/// itself is damaged, from scratch).
-fn damaged(path: &Path, e: &CheckpointError, instead: Option<Option<(Day, NaiveDate)>>) -> Warning {
+/// in its place (None: from scratch).
+fn damaged(path: &Path, e: &CheckpointError, instead: Option<(Day, NaiveDate)>) -> Warning {
     let cause = e.cause();
     let what = match instead {
-        Some(Some((day, date))) => {
+        Some((day, date)) => {
             format!(
                 "restarting from the checkpoint of {date} ({}) instead",
                 ck_name(day)
             )
         }
-        _ => "planning from scratch instead".to_string(),
+        None => "planning from scratch instead".to_string(),
     };
     Warning::about_file(
         path.display().to_string(),

@@ -402,11 +402,7 @@ impl<'a> Simulation<'a> {
             return Vec::new();
         };
         let region = |st: &PlannedStage| {
-            let lifts = if st.lift_from == st.lift_to {
-                format!("lift {}", st.lift_from)
-            } else {
-                format!("lifts {}-{}", st.lift_from, st.lift_to)
-            };
+            let lifts = crate::schedule::lifts_label(st.lift_from, st.lift_to);
             format!("block {} {lifts}", st.block)
         };
         let epoch = self.scene.epoch;

@@ -4,7 +4,8 @@ use crate::common;
 
 use common::*;
 use groutready::material::{hydration_under_cooling, AdiabaticRise, ZhuPipe};
-use groutready::scene::{Air, Effect};
+use groutready::mesh::Mesh;
+use groutready::scene::{Air, Effect, Scene};
 use groutready::schedule::{CoolingStage, Pour, Schedules, Stage};
 use groutready::sim::Simulation;
 use groutready::thermal::boundary::AirTemperature;
@@ -77,13 +78,13 @@ fn insulated_block_follows_each_adiabatic_curve() {
     }
 }
 
-#[test]
-fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
-    let extra = PIPES;
+/// One insulated 6 × 4 m block with hydration (θ0 25 °C, m 0.35) and pipes,
+/// `nx` × `ny` elements: the scene, its mesh and the rise.
+fn piped_block(nx: u32, ny: u32) -> (Scene, Mesh, AdiabaticRise) {
     let mut sc = scene(
         "\"hydration\", \"pipe_cooling\"",
-        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
-        extra,
+        &blocks_geometry(1, 6.0, 4.0, 1, nx, ny),
+        PIPES,
     );
     let rise = AdiabaticRise::Exponential {
         theta0: 25.0,
@@ -91,6 +92,12 @@ fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
     };
     sc.concrete.adiabatic = Some(rise.clone());
     let mesh = blocks_mesh(&sc);
+    (sc, mesh, rise)
+}
+
+#[test]
+fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
+    let (sc, mesh, rise) = piped_block(2, 2);
     let stages = vec![
         PlannedStage {
             block: 1,
@@ -162,17 +169,7 @@ fn insulated_block_with_pipes_follows_zhu_including_a_stage_change() {
 
 #[test]
 fn a_stage_ends_when_its_target_is_reached() {
-    let mut sc = scene(
-        "\"hydration\", \"pipe_cooling\"",
-        &blocks_geometry(1, 6.0, 4.0, 1, 1, 1),
-        PIPES,
-    );
-    let rise = AdiabaticRise::Exponential {
-        theta0: 25.0,
-        m: 0.35,
-    };
-    sc.concrete.adiabatic = Some(rise.clone());
-    let mesh = blocks_mesh(&sc);
+    let (sc, mesh, rise) = piped_block(1, 1);
     let stage = PlannedStage {
         block: 1,
         lift_from: 1,
@@ -647,17 +644,7 @@ fn accumulated_fixed_steps_share_one_factorisation() {
 /// different history, so the test would catch it.
 #[test]
 fn a_water_change_inside_a_stage_follows_zhu_superposition() {
-    let mut sc = scene(
-        "\"hydration\", \"pipe_cooling\"",
-        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
-        PIPES,
-    );
-    let rise = AdiabaticRise::Exponential {
-        theta0: 25.0,
-        m: 0.35,
-    };
-    sc.concrete.adiabatic = Some(rise.clone());
-    let mesh = blocks_mesh(&sc);
+    let (sc, mesh, rise) = piped_block(2, 2);
     let stage = PlannedStage {
         block: 1,
         lift_from: 1,
