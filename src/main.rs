@@ -348,6 +348,9 @@ fn print_plan(summary: &app::plan::PlanSummary) {
         st.resimulation_seconds,
         summary.checkpoints_kept
     );
+    if !st.reused.is_empty() {
+        println!("reused from the last plan: {}", st.reused.join(", "));
+    }
     if summary.remedied {
         println!(
             "remedied schedules: {}",

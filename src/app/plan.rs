@@ -178,6 +178,7 @@ fn write_folder(
         previous,
     )?;
     restart::save_plan(dir, scene, &out_plan.plan)?;
+    restart::save_search(dir, &out_plan.memo, out_plan.verified.as_ref())?;
     let p = dir.join("run.txt");
     std::fs::write(&p, run_text(inputs, &out_plan.baseline)).map_err(io_err(&p))?;
     staging.commit().map_err(io_err(dest))?;

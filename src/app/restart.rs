@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use chrono::NaiveDate;
 
 use crate::planner::edit::first_change;
-use crate::planner::plan::Restart;
+use crate::planner::memo::{Lineage, SearchMemo};
+use crate::planner::plan::{LastPlan, Restart};
 use crate::planner::{Plan, PlanOptions};
 use crate::scene::Scene;
 use crate::schedule::{self, Schedules, Warning};
@@ -30,12 +31,17 @@ const HISTORY: &str = "history.bin";
 const INPUTS: &str = "inputs";
 const SCENE: &str = "scene.json";
 const PLAN: &str = "plan.bin";
+/// the remedy search's parts and what they read (`planner::memo`)
+const SEARCH: &str = "search.bin";
+/// the run verifying the remedies: its `inputs/`, `history.bin`, checkpoints
+const VERIFIED: &str = "verified";
 
 /// The layout of the postcard files (checkpoints, history, plan): postcard
 /// is positional, so a file written before a field was added would decode
 /// into the wrong fields. Bump it with any change of a type they hold.
 /// 2: cooling stages with water changes, warnings in the thermal state.
-const FORMAT: u32 = 2;
+/// 3: the remedy search kept (`search.bin`, `verified/`), `PlanStats::reused`.
+const FORMAT: u32 = 3;
 
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.
@@ -44,11 +50,7 @@ pub fn fingerprint(scene: &Scene) -> String {
     s.planner = Default::default();
     let text = serde_json::to_string(&s).unwrap_or_default();
     // FNV-1a: stable across Rust versions, unlike the std hasher.
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
+    let h = crate::planner::memo::fnv1a(text.as_bytes());
     format!(
         "groutready {} format {FORMAT} scene {h:016x}\n",
         env!("CARGO_PKG_VERSION")
@@ -135,16 +137,106 @@ pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Day) 
         let instead = latest.as_ref().map(|c| (c.day, scene.epoch.date(c.day)));
         found.damaged.push(damaged(path, e, instead));
     }
+    let last_plan = latest
+        .as_ref()
+        .and_then(|_| last_plan(&dir, first, &mut found.damaged));
     found.previous = latest.map(|checkpoint| Previous {
         restart: Restart {
             checkpoint,
             older: good,
             history,
+            last_plan,
         },
         first_change: first,
         dir,
     });
     found
+}
+
+/// The last plan's remedy search and its verification's run, when the
+/// folder kept them. A damaged file means searching again, and says so.
+fn last_plan(
+    dir: &Path,
+    first_change: Option<NaiveDate>,
+    damaged: &mut Vec<Warning>,
+) -> Option<LastPlan> {
+    let path = dir.join(SEARCH);
+    if !path.is_file() {
+        return None;
+    }
+    let redo = |e: &CheckpointError| {
+        Warning::about_file(
+            path.display().to_string(),
+            format!(
+                "damaged restart file ({}); searching the remedies again instead",
+                e.cause()
+            ),
+        )
+    };
+    let memo: SearchMemo = match read_file(&path) {
+        Ok(m) => m,
+        Err(e) => {
+            damaged.push(redo(&e));
+            return None;
+        }
+    };
+    let verified = match read_lineage(&dir.join(VERIFIED)) {
+        Ok(l) => l,
+        Err(e) => {
+            damaged.push(redo(&e));
+            return None;
+        }
+    };
+    Some(LastPlan {
+        memo,
+        verified,
+        first_change,
+    })
+}
+
+/// A run kept in `dir` (None when there is none).
+fn read_lineage(dir: &Path) -> Result<Option<Lineage>, CheckpointError> {
+    if !dir.is_dir() {
+        return Ok(None);
+    }
+    let inputs = dir.join(INPUTS);
+    let schedules = schedule::load(&inputs).map_err(|e| CheckpointError::Schedules {
+        path: inputs.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut checkpoints: Vec<Checkpoint> = list(dir)?
+        .iter()
+        .map(|(_, p)| read_checkpoint(p))
+        .collect::<Result<_, _>>()?;
+    checkpoints.sort_by_key(|c| c.day);
+    Ok(Some(Lineage {
+        schedules,
+        checkpoints,
+        history: read_file(&dir.join(HISTORY))?,
+    }))
+}
+
+/// Writes the remedy search and its verification's run into the staged
+/// `restart/`, for the next plan to reuse (`planner::memo`).
+pub fn save_search(
+    staging: &Path,
+    memo: &SearchMemo,
+    verified: Option<&Lineage>,
+) -> Result<(), CheckpointError> {
+    let dir = staging.join(RESTART_DIR);
+    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+    write_file(&dir.join(SEARCH), memo, "remedy search")?;
+    let Some(l) = verified else {
+        return Ok(());
+    };
+    let v = dir.join(VERIFIED);
+    let inputs = v.join(INPUTS);
+    schedule::write_dir(&l.schedules, &inputs).map_err(io_err(&inputs))?;
+    write_file(&v.join(HISTORY), &l.history, "history")?;
+    for ck in &l.checkpoints {
+        write_file(&v.join(ck_name(ck.day)), ck, "checkpoint")?;
+    }
+    Ok(())
 }
 
 /// Reads a checkpoint and refuses one holding a non-finite value.

@@ -11,6 +11,7 @@ use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Checkpoint, History, RunStats, SimError};
 use crate::vocab::{Day, Epoch, ZoneId};
 
+use super::memo::{Lineage, SearchMemo};
 use super::readiness::{MeterComparison, Plan, PlanStats, ZoneHistory, ZoneReadiness};
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
@@ -64,6 +65,10 @@ pub struct PlanOutput {
     pub remedied: Option<Schedules>,
     /// zones that become not groutable once the remedies are applied
     pub newly_flagged: Vec<ZoneReadiness>,
+    /// the remedy search, for the next plan to reuse
+    pub memo: SearchMemo,
+    /// the run verifying the remedies, with its checkpoints
+    pub verified: Option<Lineage>,
 }
 
 /// The as-of date the schedules imply: the day after the last zone marked
@@ -100,9 +105,9 @@ pub fn plan(
         observe: vec![],
     };
     let restarted_from = restart.as_ref().map(|r| scene.epoch.date(r.checkpoint.day));
-    let (restart, older) = match restart {
-        Some(r) => (Some((r.checkpoint, r.history)), r.older),
-        None => (None, Vec::new()),
+    let (restart, older, last) = match restart {
+        Some(r) => (Some((r.checkpoint, r.history)), r.older, r.last_plan),
+        None => (None, Vec::new(), None),
     };
     let (mut runner, baseline) = Runner::baseline(
         scene,
@@ -114,16 +119,19 @@ pub fn plan(
         &mut |d, e| progress(Progress::Baseline { day: d, end: e }),
     )?;
     runner.add_older(older);
+    let last = last.map(|l| {
+        runner.lineages.extend(l.verified);
+        (l.memo, l.first_change.map(|d| scene.epoch.day(d)))
+    });
     let baseline_seconds = t0.elapsed().as_secs_f64();
 
     let grout = grout_days(&rules, schedules);
     let idx = HistoryIndex::new(&runner.history);
     let mut zones: Vec<ZoneReadiness> = rows
         .iter()
-        .map(|&(date, zone)| {
-            let mut r = rules.evaluate(&idx, zone, scene.epoch.day(date), &grout);
-            r.history = date < as_of;
-            r
+        .map(|&(date, zone)| ZoneReadiness {
+            history: date < as_of,
+            ..rules.evaluate(&idx, zone, scene.epoch.day(date), &grout)
         })
         .collect();
     let flagged: Vec<ZoneReadiness> = zones
@@ -144,6 +152,7 @@ pub fn plan(
         &layout,
         &flagged,
         &to_grout,
+        last.as_ref().map(|(m, first)| (m, *first)),
         &mut |what| progress(Progress::Resimulation(what.to_string())),
     )?;
     for z in zones.iter_mut() {
@@ -151,21 +160,8 @@ pub fn plan(
     }
 
     let idx = HistoryIndex::new(&runner.history);
-    let mut charted: Vec<(ZoneId, NaiveDate)> =
-        flagged.iter().map(|z| (z.zone_id(), z.planned)).collect();
     let meters = meter_comparisons(&rules, &idx, schedules, end_day);
-    for m in &meters {
-        let id = ZoneId::new(m.joint, m.zone);
-        if !charted.iter().any(|c| c.0 == id) {
-            if let Some(g) = schedules.grouting_of(id) {
-                charted.push((id, g.planned));
-            }
-        }
-    }
-    let histories = charted
-        .iter()
-        .map(|&(id, planned)| zone_history(&rules, &idx, id, planned))
-        .collect();
+    let histories = charted(&rules, &idx, schedules, &flagged, &meters);
     let plan = Plan {
         scene: scene.name.clone(),
         as_of,
@@ -179,6 +175,7 @@ pub fn plan(
             restarted_from,
             resimulations: runner.resimulations(),
             resimulation_seconds: t_search.elapsed().as_secs_f64(),
+            reused: outcome.reused,
             total_seconds: t0.elapsed().as_secs_f64(),
         },
     };
@@ -189,7 +186,34 @@ pub fn plan(
         baseline,
         remedied: outcome.schedules,
         newly_flagged: outcome.newly_flagged,
+        memo: outcome.memo,
+        verified: outcome.lineage,
     })
+}
+
+/// The histories the charts draw: every flagged zone's, then those of the
+/// zones with joint meters.
+fn charted(
+    rules: &Rules,
+    idx: &HistoryIndex,
+    schedules: &Schedules,
+    flagged: &[ZoneReadiness],
+    meters: &[MeterComparison],
+) -> Vec<ZoneHistory> {
+    let mut charted: Vec<(ZoneId, NaiveDate)> =
+        flagged.iter().map(|z| (z.zone_id(), z.planned)).collect();
+    for m in meters {
+        let id = ZoneId::new(m.joint, m.zone);
+        if !charted.iter().any(|c| c.0 == id) {
+            if let Some(g) = schedules.grouting_of(id) {
+                charted.push((id, g.planned));
+            }
+        }
+    }
+    charted
+        .iter()
+        .map(|&(id, planned)| zone_history(rules, idx, id, planned))
+        .collect()
 }
 
 /// A restart of the baseline from an earlier run folder.
@@ -198,6 +222,17 @@ pub struct Restart {
     pub history: History,
     /// earlier checkpoints of that run, for the remedy searches
     pub older: Vec<Checkpoint>,
+    /// that run's remedy search, when the folder kept it
+    pub last_plan: Option<LastPlan>,
+}
+
+/// The last plan's remedy search, for [`super::memo`]'s reuse.
+pub struct LastPlan {
+    pub memo: SearchMemo,
+    /// its verification's run
+    pub verified: Option<Lineage>,
+    /// the first date the schedules differ from that plan's (None: same)
+    pub first_change: Option<NaiveDate>,
 }
 
 /// Progress of a plan, for a progress bar or a log.

@@ -253,6 +253,9 @@ pub struct PlanStats {
     /// wall time of the remedy search (its re-simulations run two at a
     /// time, so this is not their sum)
     pub resimulation_seconds: f64,
+    /// the parts of the remedy search taken from the last plan, in words
+    /// ("delay search (1 runs)")
+    pub reused: Vec<String>,
     pub total_seconds: f64,
 }
 

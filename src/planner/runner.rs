@@ -11,6 +11,7 @@ use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation};
 use crate::vocab::Day;
 
 use super::edit::first_change;
+use super::memo::Lineage;
 
 /// The baseline run's restart points and histories.
 pub struct Runner<'a> {
@@ -21,6 +22,8 @@ pub struct Runner<'a> {
     /// checkpoints of the baseline, by day
     pub checkpoints: Vec<Checkpoint>,
     pub history: History,
+    /// other finished runs to restart from (the last plan's verification)
+    pub lineages: Vec<Lineage>,
     /// re-simulations run (they may run on several threads; the plan
     /// reports their wall time, measured around the whole search)
     resimulations: AtomicUsize,
@@ -81,6 +84,7 @@ impl<'a> Runner<'a> {
             base,
             checkpoints,
             history,
+            lineages: Vec::new(),
             resimulations: AtomicUsize::new(0),
         }
     }
@@ -100,18 +104,80 @@ impl<'a> Runner<'a> {
         cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<History, SimError> {
+        let sim = self.resimulate(schedules, span, None, cancel, progress)?;
+        Ok(sim.history())
+    }
+
+    /// [`Runner::simulate`] keeping a checkpoint every `every_days`: the run
+    /// as a [`Lineage`] later re-simulations can restart from.
+    pub fn simulate_lineage(
+        &self,
+        schedules: &Schedules,
+        span: &Span,
+        every_days: i64,
+    ) -> Result<Lineage, SimError> {
+        let mut sim = self.resimulate(schedules, span, Some(every_days), None, &mut |_, _| {})?;
+        Ok(Lineage {
+            schedules: schedules.clone(),
+            checkpoints: std::mem::take(&mut sim.checkpoints),
+            history: sim.history(),
+        })
+    }
+
+    /// The latest checkpoint, of the baseline or another lineage, on or
+    /// before the first date `schedules` differ from that run's, with the
+    /// history before it. Another lineage recorded only its own step ends,
+    /// so its checkpoint must precede the first day `span` observes.
+    fn restart_for(&self, schedules: &Schedules, span: &Span) -> Option<(&Checkpoint, &History)> {
+        let observed = span.observe.iter().copied().min();
+        let base = std::iter::once((&self.base, &self.checkpoints, &self.history, None));
+        let others = self
+            .lineages
+            .iter()
+            .map(|l| (&l.schedules, &l.checkpoints, &l.history, observed));
+        base.chain(others)
+            .filter_map(|(s, cks, h, limit)| {
+                let from = first_change(s, schedules).map(|d| self.scene.epoch.day(d));
+                let from = match (from, limit) {
+                    (Some(f), Some(l)) => Some(f.min(l)),
+                    (f, l) => f.or(l),
+                };
+                cks.iter()
+                    .rev()
+                    .find(|c| from.is_none_or(|f| c.day <= f))
+                    .map(|c| (c, h))
+            })
+            // the first of equals: the baseline
+            .fold(
+                None,
+                |best: Option<(&Checkpoint, &History)>, x| match best {
+                    Some(b) if b.0.day >= x.0.day => Some(b),
+                    _ => Some(x),
+                },
+            )
+    }
+
+    /// The day a re-simulation of `schedules` over `span` restarts from
+    /// (None: day 0).
+    pub fn restart_day(&self, schedules: &Schedules, span: &Span) -> Option<Day> {
+        self.restart_for(schedules, span).map(|r| r.0.day)
+    }
+
+    fn resimulate(
+        &self,
+        schedules: &Schedules,
+        span: &Span,
+        every_days: Option<i64>,
+        cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<Simulation<'a>, SimError> {
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
         sim.cancel = cancel;
+        sim.checkpoint_every = every_days;
         sim.set_end_day(span.end_day);
-        let from = first_change(&self.base, schedules).map(|d| self.scene.epoch.day(d));
-        let restart = self
-            .checkpoints
-            .iter()
-            .rev()
-            .find(|c| from.is_none_or(|f| c.day <= f))
-            .cloned();
+        let restart = self.restart_for(schedules, span);
         // Observed days before the restart are recorded by the baseline already.
-        let restart_day = restart.as_ref().map_or(Day(0), |c| c.day);
+        let restart_day = restart.map_or(Day(0), |c| c.0.day);
         let observe: Vec<Day> = span
             .observe
             .iter()
@@ -119,12 +185,12 @@ impl<'a> Runner<'a> {
             .filter(|&d| d >= restart_day)
             .collect();
         sim.observe_days(&observe);
-        if let Some(ck) = &restart {
-            sim.restore(ck, &self.history);
+        if let Some((ck, history)) = restart {
+            sim.restore(ck, history);
         }
         sim.run(None, progress)?;
         self.resimulations.fetch_add(1, AtomicOrdering::Relaxed);
-        Ok(sim.history())
+        Ok(sim)
     }
 
     /// Adds checkpoints of an earlier run that agree with this baseline

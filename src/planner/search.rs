@@ -28,6 +28,7 @@ use crate::sim::{History, SimError};
 use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
+use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, SupercoolPart, Verified};
 use super::plan::zone_history;
 use super::readiness::{
     DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory, ZoneReadiness,
@@ -43,6 +44,12 @@ pub struct Outcome {
     /// zones still to grout that were groutable but fail once the remedies
     /// are applied, with their readiness then
     pub newly_flagged: Vec<ZoneReadiness>,
+    /// what the next plan may reuse
+    pub memo: SearchMemo,
+    /// the verification's run, with its checkpoints
+    pub lineage: Option<Lineage>,
+    /// the parts taken from the last plan, in words
+    pub reused: Vec<String>,
 }
 
 /// The grouting day of every zone in `s`.
@@ -60,12 +67,39 @@ struct Ctx<'x, 'r, 'a> {
     rules: &'x Rules<'r>,
     layout: &'x DamLayout,
     progress: &'x mut dyn FnMut(&str),
+    /// the runs this search made, and the last day it read
+    runs: usize,
+    read_until: Day,
 }
 
-impl Ctx<'_, '_, '_> {
+impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
+    fn new(
+        runner: &'x Runner<'a>,
+        as_of: NaiveDate,
+        rules: &'x Rules<'r>,
+        layout: &'x DamLayout,
+        progress: &'x mut dyn FnMut(&str),
+    ) -> Self {
+        Ctx {
+            runner,
+            as_of,
+            rules,
+            layout,
+            progress,
+            runs: 0,
+            read_until: Day(i64::MIN),
+        }
+    }
+
     fn run(&mut self, what: &str, s: &Schedules, span: &Span) -> Result<History, SimError> {
         (self.progress)(what);
+        self.runs += 1;
         self.runner.simulate(s, span)
+    }
+
+    /// Notes that the search's answer depends on the runs up to `day`.
+    fn read(&mut self, day: Day) {
+        self.read_until = self.read_until.max(day);
     }
 
     fn check(&self, h: &History, s: &Schedules, key: ZoneId, day: Day) -> ZoneReadiness {
@@ -74,8 +108,37 @@ impl Ctx<'_, '_, '_> {
     }
 }
 
+/// What a search part's answer depends on besides the schedules: the as-of
+/// date, the settings, the flagged zones' readiness on their dates (not
+/// whether they re-open later: the baseline's end decides that) and the
+/// grouting dates of the zones below them (the bottom-up rule reads them,
+/// whatever the date).
+fn search_key(
+    as_of: NaiveDate,
+    rules: &Rules,
+    grout: &HashMap<ZoneId, Day>,
+    flagged: &[ZoneReadiness],
+) -> u64 {
+    let below: Vec<(ZoneId, Option<Day>)> = flagged
+        .iter()
+        .filter_map(|z| rules.zone_below(z.zone_id()))
+        .map(|b| (b, grout.get(&b).copied()))
+        .collect();
+    let on_their_dates: Vec<ZoneReadiness> = flagged
+        .iter()
+        .map(|z| ZoneReadiness {
+            reopened: None,
+            ..z.clone()
+        })
+        .collect();
+    digest(&(as_of, rules.settings, on_their_dates, below))
+}
+
 /// Searches remedies for the `flagged` zones; `to_grout` are all zones still
-/// to grout (re-checked in the final run).
+/// to grout (re-checked in the final run). `last` holds the last plan's
+/// search and the first day the schedules changed since: the parts whose
+/// inputs did not change are taken from it ([`super::memo`]).
+#[allow(clippy::too_many_arguments)]
 pub fn search(
     runner: &Runner<'_>,
     as_of: NaiveDate,
@@ -83,55 +146,133 @@ pub fn search(
     layout: &DamLayout,
     flagged: &[ZoneReadiness],
     to_grout: &[ZoneId],
+    last: Option<(&SearchMemo, Option<Day>)>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Outcome, SimError> {
     let base = runner.base.clone();
-    let mut ctx = Ctx {
-        runner,
-        as_of,
-        rules,
-        layout,
-        progress,
+    let grout = grout_days(rules, &base);
+    let key = search_key(as_of, rules, &grout, flagged);
+    let mut ctx = Ctx::new(runner, as_of, rules, layout, progress);
+    let mut reused = Vec::new();
+    let (supercool, delay) = both_searches(&mut ctx, &base, flagged, key, last, &mut reused)?;
+    let remedies: HashMap<ZoneId, Remedy> = flagged
+        .iter()
+        .map(|z| {
+            (
+                z.zone_id(),
+                propose(z.zone_id(), &supercool.value, &delay.value, rules.settings),
+            )
+        })
+        .collect();
+    let sorted: BTreeMap<ZoneId, &Remedy> = remedies.iter().map(|(k, r)| (*k, r)).collect();
+    let grouting: BTreeMap<ZoneId, Day> = grout.into_iter().collect();
+    let vkey = digest(&(key, to_grout, sorted, grouting));
+    let old = last.and_then(|(m, first)| m.verified.as_ref().filter(|p| p.valid(vkey, first)));
+    let (verified, schedules, lineage) = match old {
+        Some(p) => {
+            (ctx.progress)("reusing the last plan's verification");
+            reused.push(runs_saved("verification", p.runs));
+            let remedies: HashMap<ZoneId, Remedy> = p.value.remedies.iter().cloned().collect();
+            let schedules = remedied_schedules(&ctx, &base, flagged, &remedies);
+            (p.clone(), schedules, runner.lineages.first().cloned())
+        }
+        None => {
+            ctx.runs = 0;
+            ctx.read_until = Day(i64::MIN);
+            let mut remedies = remedies;
+            let (schedules, newly_flagged, lineage) =
+                verify_together(&mut ctx, &base, flagged, to_grout, &mut remedies)?;
+            let mut value = Verified {
+                remedies: remedies.into_iter().collect(),
+                newly_flagged,
+            };
+            value.remedies.sort_by_key(|r| r.0);
+            (part(vkey, &ctx, value), schedules, lineage)
+        }
     };
-    // The two searches are independent: the delay search runs beside the
-    // supercooling search (the simulations are single-threaded at this size).
-    // Each returns its own findings, joined by name below, so the outcome
-    // does not depend on which finishes first.
+    Ok(Outcome {
+        remedies: verified.value.remedies.iter().cloned().collect(),
+        schedules,
+        newly_flagged: verified.value.newly_flagged.clone(),
+        memo: SearchMemo {
+            supercool: Some(supercool),
+            delay: Some(delay),
+            verified: Some(verified),
+        },
+        lineage,
+        reused,
+    })
+}
+
+/// The supercooling and the delay search, each taken from `last` (the last
+/// plan's memo and the first day the schedules changed since) when its
+/// inputs did not change, else run. The two are independent: the delay
+/// search runs beside the supercooling search (the simulations are
+/// single-threaded at this size). Each returns its own findings, joined by
+/// name later, so the outcome does not depend on which finishes first.
+fn both_searches(
+    ctx: &mut Ctx,
+    base: &Schedules,
+    flagged: &[ZoneReadiness],
+    key: u64,
+    last: Option<(&SearchMemo, Option<Day>)>,
+    reused: &mut Vec<String>,
+) -> Result<(SupercoolPart, DelayPart), SimError> {
+    let first = last.and_then(|l| l.1);
+    let sc_hit = last
+        .and_then(|l| l.0.supercool.as_ref())
+        .filter(|p| p.valid(key, first))
+        .cloned();
+    let dl_hit = last
+        .and_then(|l| l.0.delay.as_ref())
+        .filter(|p| p.valid(key, first))
+        .cloned();
+    let (runner, as_of, rules, layout) = (ctx.runner, ctx.as_of, ctx.rules, ctx.layout);
     let (supercool, delay) = std::thread::scope(|sc| {
         let delay = sc.spawn(|| {
+            if let Some(p) = &dl_hit {
+                return Ok::<_, SimError>(p.clone());
+            }
             let mut quiet = |_: &str| {};
-            let mut c = Ctx {
-                runner,
-                as_of,
-                rules,
-                layout,
-                progress: &mut quiet,
-            };
-            delay_search(&mut c, &base, flagged)
+            let mut c = Ctx::new(runner, as_of, rules, layout, &mut quiet);
+            let value = delay_search(&mut c, base, flagged)?;
+            Ok(part(key, &c, value))
         });
-        let supercool = supercool_search(&mut ctx, &base, flagged);
+        let supercool = match &sc_hit {
+            Some(p) => Ok(p.clone()),
+            None => supercool_search(ctx, base, flagged).map(|v| part(key, ctx, v)),
+        };
         (
             supercool,
             delay.join().expect("the delay search does not panic"),
         )
     });
     let (supercool, delay) = (supercool?, delay?);
-    let mut remedies: HashMap<ZoneId, Remedy> = flagged
-        .iter()
-        .map(|z| {
-            (
-                z.zone_id(),
-                propose(z.zone_id(), &supercool, &delay, rules.settings),
-            )
-        })
-        .collect();
-    verify_together(&mut ctx, &base, flagged, to_grout, &mut remedies).map(
-        |(schedules, newly_flagged)| Outcome {
-            remedies,
-            schedules,
-            newly_flagged,
-        },
-    )
+    for (hit, what, runs) in [
+        (sc_hit.is_some(), "supercooling search", supercool.runs),
+        (dl_hit.is_some(), "delay search", delay.runs),
+    ] {
+        if hit {
+            (ctx.progress)(&format!("reusing the last plan's {what}"));
+            reused.push(runs_saved(what, runs));
+        }
+    }
+    Ok((supercool, delay))
+}
+
+/// "delay search (1 run)": a reused part and the runs it saved.
+fn runs_saved(what: &str, runs: usize) -> String {
+    format!("{what} ({runs} run{})", if runs == 1 { "" } else { "s" })
+}
+
+/// A search part's answer with what it depended on.
+fn part<T>(key: u64, ctx: &Ctx, value: T) -> Part<T> {
+    Part {
+        key,
+        read_until: ctx.read_until,
+        runs: ctx.runs,
+        value,
+    }
 }
 
 /// The cheaper of the two remedies found for a zone, by the scene's costs.
@@ -192,34 +333,38 @@ fn propose(
 /// (its neighbours' remedies differ from those of the search) gets one
 /// supercooling step or one week more, up to the limits, and the run is
 /// repeated (at most three rounds). Returns the remedied schedules (None
-/// when nothing is proposed) and the zones the remedies newly flag.
+/// when nothing is proposed), the zones the remedies newly flag and the
+/// last round's run with its checkpoints.
+type Together = (Option<Schedules>, Vec<ZoneReadiness>, Option<Lineage>);
+
 fn verify_together(
     ctx: &mut Ctx,
     base: &Schedules,
     flagged: &[ZoneReadiness],
     to_grout: &[ZoneId],
     remedies: &mut HashMap<ZoneId, Remedy>,
-) -> Result<(Option<Schedules>, Vec<ZoneReadiness>), SimError> {
+) -> Result<Together, SimError> {
     let rules = ctx.rules;
     let mut round = 0;
     loop {
         let Some(remedied) = remedied_schedules(ctx, base, flagged, remedies) else {
-            return Ok((None, Vec::new()));
+            return Ok((None, Vec::new(), None));
         };
         let new_days = grout_days(rules, &remedied);
         let end = to_grout
             .iter()
             .filter_map(|k| new_days.get(k))
             .fold(Day(0), |a, &b| a.max(b));
-        let h = ctx.run(
-            "verifying all remedies together",
-            &remedied,
-            &Span {
-                end_day: end,
-                observe: vec![],
-            },
-        )?;
-        let idx = HistoryIndex::new(&h);
+        (ctx.progress)("verifying all remedies together");
+        ctx.runs += 1;
+        ctx.read(end);
+        let span = Span {
+            end_day: end,
+            observe: vec![],
+        };
+        let every = rules.settings.checkpoint_days as i64;
+        let lineage = ctx.runner.simulate_lineage(&remedied, &span, every)?;
+        let idx = HistoryIndex::new(&lineage.history);
         let mut newly_flagged = Vec::new();
         let mut failing = Vec::new();
         for &key in to_grout {
@@ -250,7 +395,7 @@ fn verify_together(
             }
         }
         if failing.is_empty() || round == 2 {
-            return Ok((Some(remedied), newly_flagged));
+            return Ok((Some(remedied), newly_flagged, Some(lineage)));
         }
         for key in failing {
             if let Some(rem) = remedies.get_mut(&key) {
@@ -351,8 +496,6 @@ pub(crate) fn lifts_above(rules: &Rules) -> u32 {
     (rules.settings.supercool_above_m / rules.lift_height).round() as u32
 }
 
-type Found<T> = HashMap<ZoneId, (Option<T>, String)>;
-
 /// How far a zone is from passing the rules cooling can fix, per rule
 /// (aperture in mm above the limit, temperature in °C below the limit);
 /// every entry ≥ 0 when they pass.
@@ -452,6 +595,7 @@ fn supercool_search(
         end_day: end,
         observe: vec![],
     };
+    ctx.read(end);
     let edits = |ks: &BTreeMap<ZoneId, u32>| -> Vec<Supercool> {
         cands
             .iter()
@@ -672,6 +816,7 @@ fn delay_search(
         }
         match found {
             Some((days, day)) => {
+                ctx.read(day);
                 let also: Vec<u32> = base
                     .grouting
                     .iter()
@@ -702,6 +847,7 @@ fn delay_search(
             None => {
                 grout.insert(key, planned);
                 let last = planned.plus(s.max_delay_days as i64).min(sim_end);
+                ctx.read(last);
                 let at_end = ctx.rules.evaluate(&idx, key, last, &grout);
                 out.insert(
                     key,

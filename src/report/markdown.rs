@@ -64,9 +64,14 @@ fn summary(out: &mut String, plan: &Plan) {
         Some(d) => format!("restarted from the checkpoint of {d}"),
         None => "from scratch".into(),
     };
+    let reused = if p.reused.is_empty() {
+        String::new()
+    } else {
+        format!("; reused from the last plan: {}", p.reused.join(", "))
+    };
     let _ = writeln!(
         out,
-        "- Computed in {:.1} s: baseline simulation {:.1} s ({from}), {} re-simulations for remedies {:.1} s\n",
+        "- Computed in {:.1} s: baseline simulation {:.1} s ({from}), {} re-simulations for remedies {:.1} s{reused}\n",
         p.total_seconds, p.baseline_seconds, p.resimulations, p.resimulation_seconds
     );
 }

@@ -1,6 +1,8 @@
 //! What a weekly update saves: the plan from scratch, the same plan again
-//! (restarted from its own run folder), and the plan after a schedule edit
-//! (one zone's grouting moved a week later), each timed.
+//! (restarted from its own run folder, the remedy search reused), and the
+//! plan after a schedule edit (the last zone's grouting moved a week later:
+//! an edit in the plan's last month), each timed, and whether the restarted
+//! plans' readiness tables equal the plans from scratch.
 
 use std::path::Path;
 use std::time::Instant;
@@ -47,12 +49,16 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
     );
     let (t1, p1) = time(&inputs, &PlanRequest::default(), &out, quiet)?;
     println!(
-        "same schedules again: {t1:.1} s (baseline {:.1} s, restarted from {})",
+        "same schedules again: {t1:.1} s, {:.1}× faster (baseline {:.1} s, restarted from {}; {} re-simulations; reused: {}); same readiness table: {}",
+        t0 / t1,
         p1.stats.baseline_seconds,
         p1.stats
             .restarted_from
             .map(|d| d.to_string())
-            .unwrap_or_else(|| "day 0".into())
+            .unwrap_or_else(|| "day 0".into()),
+        p1.stats.resimulations,
+        reused(&p1),
+        yes_no(p1.zones == p0.zones)
     );
     // The weekly edit: the last zone to grout moves a week later.
     let Some(last) = p0.to_grout().map(|z| (z.planned, z.joint, z.zone)).max() else {
@@ -73,16 +79,37 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
         }
     }
     println!(
-        "joint {} zone {} moved to {}: restarted {t2:.1} s (baseline {:.1} s from {}) vs from scratch {t3:.1} s (baseline {:.1} s); largest relative difference of a zone's min aperture {diff:.1e}",
+        "joint {} zone {} moved to {}: restarted {t2:.1} s (baseline {:.1} s from {}; {} re-simulations in {:.1} s; reused: {}) vs from scratch {t3:.1} s (baseline {:.1} s): {:.1}× faster; same readiness table: {}; largest relative difference of a zone's min aperture {diff:.1e}",
         last.1,
         last.2,
         last.0 + chrono::Duration::days(7),
         p2.stats.baseline_seconds,
         p2.stats.restarted_from.map(|d| d.to_string()).unwrap_or_else(|| "day 0".into()),
-        p3.stats.baseline_seconds
+        p2.stats.resimulations,
+        p2.stats.resimulation_seconds,
+        reused(&p2),
+        p3.stats.baseline_seconds,
+        t3 / t2,
+        yes_no(p2.zones == p3.zones)
     );
     let _ = std::fs::remove_dir_all(&tmp);
     Ok(())
+}
+
+fn reused(p: &crate::planner::Plan) -> String {
+    if p.stats.reused.is_empty() {
+        "nothing".into()
+    } else {
+        p.stats.reused.join(", ")
+    }
+}
+
+fn yes_no(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "NO"
+    }
 }
 
 fn tempfile_dir() -> Result<std::path::PathBuf, StudyError> {

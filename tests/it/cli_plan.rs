@@ -313,3 +313,72 @@ fn a_failed_plan_keeps_the_previous_run_folder() {
         vec!["out".to_string(), "sched".to_string()]
     );
 }
+
+/// A weekly re-plan costs what changed (issue 15 item 4): the same plan
+/// again takes both remedy searches and their verification from the run
+/// folder (`restart/search.bin`), re-simulates nothing and writes the same
+/// readiness table and report. A damaged `search.bin` is named, and the
+/// plan searches again instead.
+#[test]
+fn the_same_plan_again_reuses_the_remedy_search() {
+    let shared = crate::common::small_plan();
+    assert!(shared.output.status.success(), "{}", shared.stderr());
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("plan");
+    copy_dir(&shared.out, &out);
+    let again = |horizon: &str| {
+        bin()
+            .args([
+                "plan",
+                "models/small_dam_joints.toml",
+                "--as-of",
+                "2024-06-01",
+                "--horizon-days",
+                horizon,
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let o = again("105");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}");
+    assert!(stdout.contains("+ 0 re-simulations"), "{stdout}");
+    assert!(
+        stdout.contains("reused from the last plan: supercooling search (")
+            && stdout.contains("delay search (")
+            && stdout.contains("verification ("),
+        "{stdout}"
+    );
+    assert!(shared.stdout().contains("re-simulations in"));
+    assert!(!shared.stdout().contains("reused"), "{}", shared.stdout());
+    assert_eq!(readiness(&out), readiness(&shared.out));
+    let zones = |dir: &Path| -> serde_json::Value {
+        let text = std::fs::read_to_string(dir.join("report.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["zones"].clone()
+    };
+    assert_eq!(zones(&out), zones(&shared.out));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("reused from the last plan: supercooling search"));
+
+    // A damaged search file: said so, and searched again (a short horizon
+    // here, so that the search is quick).
+    let search = out.join("restart/search.bin");
+    std::fs::write(&search, b"\x07not a search").unwrap();
+    let o = again("1");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    // The table wraps long warnings: compare with single spaces.
+    let all = format!("{stdout}{stderr}")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert!(
+        all.contains("search.bin: damaged restart file (")
+            && all.contains("searching the remedies again instead"),
+        "{all}"
+    );
+    assert!(!stdout.contains("reused"), "{stdout}");
+}

@@ -253,6 +253,7 @@ fn fixture() -> Plan {
             restarted_from: Some(date("2024-08-15")),
             resimulations: 7,
             resimulation_seconds: 310.25,
+            reused: vec!["delay search (1 run)".into()],
             total_seconds: 431.0,
         },
     }

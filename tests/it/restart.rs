@@ -268,3 +268,88 @@ fn a_water_change_inside_a_running_stage_restarts_at_its_date() {
         });
     assert!(cooler, "the colder water must cool the zone by day 170+");
 }
+
+/// A re-simulation restarts from the latest checkpoint of any run the
+/// runner holds — the baseline or the last plan's verification run (a
+/// lineage, issue 15 item 4) — before the first date it differs from that
+/// run, and equals the run from the baseline's checkpoint.
+#[test]
+fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
+    use groutready::planner::runner::{Runner, Span};
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    let layout = app::dam_layout(&inputs.mesh);
+    // The last plan's remedy: zone 3 of joint 2 supercooled from day 100.
+    let zone = ZoneId::new(2, 3);
+    let planned = inputs.schedules.grouting_of(zone).unwrap().planned;
+    let (remedied, _) = edit::supercool(
+        &inputs.schedules,
+        &layout,
+        &[edit::Supercool {
+            zone,
+            delta_c: 2.0,
+            planned,
+            from: inputs.scene.epoch.date(Day(100)),
+        }],
+        3,
+    );
+    // This week's edit on top: zone 2 of joint 2 grouted a week later.
+    let moved = ZoneId::new(2, 2);
+    let g = inputs.schedules.grouting_of(moved).unwrap().planned;
+    let edited = edit::regrout(&remedied, &[(moved, g + chrono::Duration::days(7))]);
+    let edit_day = inputs.scene.epoch.day(g);
+    let day_of = |d| inputs.scene.epoch.day(d);
+    // The remedy acts from the first stage it lowers, a month before the edit.
+    let remedy_day = day_of(edit::first_change(&inputs.schedules, &remedied).unwrap());
+    assert_eq!(
+        day_of(edit::first_change(&remedied, &edited).unwrap()),
+        edit_day
+    );
+    assert!(
+        edit_day > remedy_day.plus(30) && edit_day < END,
+        "remedy on {remedy_day:?}, edit on {edit_day:?}"
+    );
+
+    let mut runner = Runner::from_parts(
+        &inputs.scene,
+        &inputs.mesh,
+        inputs.schedules.clone(),
+        base.checkpoints.clone(),
+        base.history(),
+    );
+    let span = Span {
+        end_day: END,
+        observe: vec![],
+    };
+    let from_base = runner.restart_day(&edited, &span).unwrap();
+    assert!(from_base <= remedy_day, "{from_base:?}");
+    let lineage = runner.simulate_lineage(&remedied, &span, 30).unwrap();
+    assert!(lineage.checkpoints.len() >= 3);
+    let via_base = runner.simulate(&edited, &span).unwrap();
+    runner.lineages.push(lineage);
+    let from_lineage = runner.restart_day(&edited, &span).unwrap();
+    assert!(
+        from_lineage > remedy_day && from_lineage <= edit_day,
+        "restarts from {from_lineage:?}, the edit is on {edit_day:?}"
+    );
+    // A span observing days before that checkpoint cannot use it: the
+    // lineage did not record them.
+    let observing = Span {
+        end_day: END,
+        observe: vec![remedy_day.plus(5)],
+    };
+    assert!(runner.restart_day(&edited, &observing).unwrap() <= remedy_day.plus(5));
+    let via_lineage = runner.simulate(&edited, &span).unwrap();
+    let (diff, days, labels, dt) = compare(&via_base, &via_lineage, from_base);
+    println!("restarted from day {from_lineage:?} instead of {from_base:?}: {days} days, aperture diff {diff:e}, temperature diff {dt:e} °C");
+    assert!(days > 50);
+    assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
+    assert_eq!(labels, 0);
+    assert!(dt <= 1e-9);
+    // The edit did change the run after its date (the comparison is not vacuous).
+    let (changed, ..) = compare(&runner.lineages[0].history, &via_lineage, edit_day);
+    assert!(
+        changed > 1e-4,
+        "the edit changed apertures by only {changed:e}"
+    );
+}
