@@ -834,6 +834,19 @@ impl MechanicsModel {
     /// before the first): the accumulated stresses must balance the
     /// accumulated loads and joint forces.
     pub fn equilibrium_residual(&self) -> f64 {
+        let (r, scale) = self.equilibrium_residual_parts();
+        r / scale
+    }
+
+    /// The two parts of [`equilibrium_residual`](Self::equilibrium_residual):
+    /// the residual norm ‖Σ Bᵀσ − f_ext − f_contact‖ over the free live dofs
+    /// [N] and the scale it is divided by (‖f_ext + f_contact‖, or the
+    /// largest internal nodal force when that is larger; never 0) [N]. In a
+    /// state that nothing loads (blocks contracting freely) both are
+    /// round-off and their ratio means nothing: a caller that knows the
+    /// load that strained the model (E·α·ΔT over a section) divides by that
+    /// instead (`tests/it/hard_cases.rs`).
+    pub fn equilibrium_residual_parts(&self) -> (f64, f64) {
         let sys = &self.sys;
         let mut fint = vec![0.0; self.state.u.len()];
         let mut live = vec![false; self.state.u.len()];
@@ -858,7 +871,7 @@ impl MechanicsModel {
             r2 += r * r;
             f2 += f * f;
         }
-        r2.sqrt() / f2.sqrt().max(scale).max(f64::MIN_POSITIVE)
+        (r2.sqrt(), f2.sqrt().max(scale).max(f64::MIN_POSITIVE))
     }
 
     /// Aperture [m] and state label at a grouting-zone point (bilinear over

@@ -16,6 +16,7 @@ mod fast_path;
 mod fem_elasticity;
 mod fem_elements;
 mod fem_sparse;
+mod hard_cases;
 mod joint_friction;
 mod joint_grouting;
 mod joint_two_blocks;
