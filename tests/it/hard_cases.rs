@@ -1644,7 +1644,6 @@ fn demo_dam() -> (MechanicsSettings, Mesh, Vec<(u32, u32)>) {
 /// Ignored: it fails today (the flip limit, see the `ignore` reason), which
 /// is the bug it exists to show.
 #[test]
-#[ignore = "bug: the active set's flip limit leaves closed joint points in tension (measured 0.57 MPa, 28 % of the largest joint force, 6 passes, 1.7 s); the at-once and 4-step paths differ by 7.8 % of the widest aperture (0.52 of 6.65 mm), 32 states"]
 fn the_complete_dam_loaded_at_once() {
     let t = std::time::Instant::now();
     let (settings, mesh, lifts) = demo_dam();
