@@ -435,7 +435,7 @@ impl ActiveSet {
             pending: Vec::new(),
             // Least-index switching ends only without friction (see `pivot`).
             pivots_left: if s.mu_static == 0.0 {
-                (s.max_iterations / 2) as usize
+                s.max_iterations / 2
             } else {
                 0
             },

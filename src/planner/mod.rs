@@ -24,6 +24,7 @@
 //! (exit codes, atomic run folders, weekly restart, joint meters, bad input).
 
 pub mod edit;
+pub mod limits;
 pub mod memo;
 pub mod plan;
 pub mod readiness;

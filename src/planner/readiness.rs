@@ -197,6 +197,10 @@ pub struct Remedy {
     /// beside the baseline
     #[serde(default)]
     pub verified_history: Option<ZoneHistory>,
+    /// the site limits its supercooling broke in the verification run, in
+    /// words (`planner::limits`); the supercooling is then not proposed
+    #[serde(default)]
+    pub limited: Vec<String>,
 }
 
 /// Aperture and temperature history of one zone, for charts.

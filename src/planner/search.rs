@@ -28,6 +28,7 @@ use crate::sim::{History, SimError};
 use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
+use super::limits;
 use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, SupercoolPart, Verified};
 use super::plan::zone_history;
 use super::readiness::{
@@ -326,6 +327,7 @@ fn propose(
         verified: None,
         note,
         verified_history: None,
+        limited: Vec::new(),
     }
 }
 
@@ -345,6 +347,11 @@ fn verify_together(
     remedies: &mut HashMap<ZoneId, Remedy>,
 ) -> Result<Together, SimError> {
     let rules = ctx.rules;
+    let baseline = HistoryIndex::new(&ctx.runner.history);
+    let closure: HashMap<ZoneId, f64> = flagged
+        .iter()
+        .map(|z| (z.zone_id(), z.closure_temp_c))
+        .collect();
     let mut round = 0;
     loop {
         let Some(remedied) = remedied_schedules(ctx, base, flagged, remedies) else {
@@ -367,6 +374,8 @@ fn verify_together(
         let idx = HistoryIndex::new(&lineage.history);
         let mut newly_flagged = Vec::new();
         let mut failing = Vec::new();
+        // a supercooling a site limit stopped: the set changed, run it again
+        let mut limited = false;
         for &key in to_grout {
             let Some(&day) = new_days.get(&key) else {
                 continue;
@@ -385,6 +394,15 @@ fn verify_together(
                         if let (Some(o), Some(a)) = (rem.supercool.as_mut(), a) {
                             o.aperture_mm = a;
                         }
+                        let from = rules.epoch.day(ctx.as_of);
+                        let c = closure.get(&key).copied().unwrap_or(f64::NAN);
+                        let v = limits::breaches(rules, &idx, &baseline, key, c, from, day);
+                        if !v.broken.is_empty() {
+                            stop_supercooling(rem, v.broken);
+                            limited = true;
+                            continue;
+                        }
+                        caution(rem, &v.cautions);
                     }
                     if rem.choice != RemedyChoice::None && !r.verdict.groutable() {
                         failing.push(key);
@@ -394,7 +412,7 @@ fn verify_together(
                 None => {}
             }
         }
-        if failing.is_empty() || round == 2 {
+        if !limited && (failing.is_empty() || round >= 2) {
             return Ok((Some(remedied), newly_flagged, Some(lineage)));
         }
         for key in failing {
@@ -465,6 +483,37 @@ fn remedied_schedules(
     }
     let (cooled_s, _) = edit::supercool(base, ctx.layout, &cooled, lifts_above(ctx.rules));
     Some(edit::regrout(&cooled_s, &moves))
+}
+
+/// A supercooling that breaks site limits is not proposed: the delay is,
+/// if one was found, and the note says which limits stopped it.
+fn stop_supercooling(rem: &mut Remedy, broken: Vec<limits::Breach>) {
+    let dt = rem.supercool.as_ref().map_or(0.0, |o| o.delta_c);
+    let instead = if rem.delay.is_some() {
+        rem.choice = RemedyChoice::Delay;
+        "the delay instead"
+    } else {
+        rem.choice = RemedyChoice::None;
+        "no other remedy was found"
+    };
+    rem.note = format!(
+        "supercooling {dt:.2} °C is stopped by a site limit ({}); {instead}",
+        broken.join("; ")
+    );
+    rem.verified_history = None;
+    rem.limited = broken;
+}
+
+/// Notes the limits the schedule is past already and the remedy too (once
+/// per verification round: the last round's stand).
+fn caution(rem: &mut Remedy, cautions: &[limits::Breach]) {
+    const MARK: &str = "; the schedule is past a site limit already, and the supercooling too: ";
+    if let Some(i) = rem.note.find(MARK) {
+        rem.note.truncate(i);
+    }
+    if !cautions.is_empty() {
+        rem.note = format!("{}{MARK}{}", rem.note, cautions.join("; "));
+    }
 }
 
 /// One supercooling step or one week more for a remedy that failed among

@@ -203,6 +203,19 @@ fn flagged_details(out: &mut String, plan: &Plan) {
         for l in wrap(&remedy, "  → remedy: ", "    ", LINE_WIDTH) {
             let _ = writeln!(out, "{l}");
         }
+        // A supercooling a site limit stopped: which limit, in full.
+        if let Some(r) = z.remedy.as_ref() {
+            for b in &r.limited {
+                for l in wrap(
+                    b,
+                    "    supercooling stopped by a site limit: ",
+                    "    ",
+                    LINE_WIDTH,
+                ) {
+                    let _ = writeln!(out, "{l}");
+                }
+            }
+        }
         // Why none works is what the engineer needs when there is none.
         if let Some(r) = z.remedy.as_ref().filter(|r| r.choice == RemedyChoice::None) {
             for l in wrap(&r.note, "    why: ", "    ", LINE_WIDTH) {

@@ -210,6 +210,7 @@ mod tests {
             verified: Some((Verdict::Marginal, Some(0.6))),
             note: String::new(),
             verified_history: None,
+            limited: Vec::new(),
         }
     }
 

@@ -40,6 +40,17 @@ pub struct PlannerSettings {
     /// [m]; default 9 (one zone of the demo; practice cools the zone above
     /// with it so the gradient stays small).
     pub supercool_above_m: f64,
+    /// Site limit: the concrete of a supercooled zone may not be colder at
+    /// grouting than closure − this [°C]; default 3 (practice: 2–3).
+    pub max_below_closure_c: f64,
+    /// Site limit: a supercooled zone's concrete may not cool faster than
+    /// this between two recorded days [°C/day]; default 0.5.
+    pub max_cooling_rate_c_per_day: f64,
+    /// Site limit: in a block, a zone of the supercooled region (and the
+    /// first zone above it) may not be warmer than the zone below it by
+    /// more than this at grouting [°C]; default 4 (an estimate of common
+    /// specifications; set the project's).
+    pub max_zone_gradient_c: f64,
     /// Longest delay searched [days]; default 60.
     pub max_delay_days: u32,
     /// Cost of 1 °C of supercooling of one zone, in the same unit as
@@ -68,6 +79,9 @@ impl Default for PlannerSettings {
             max_supercooling_c: 3.0,
             supercooling_step_c: 0.25,
             supercool_above_m: 9.0,
+            max_below_closure_c: 3.0,
+            max_cooling_rate_c_per_day: 0.5,
+            max_zone_gradient_c: 4.0,
             max_delay_days: 60,
             cost_per_degree_c: 1.0,
             cost_per_day: 0.2,
@@ -143,6 +157,18 @@ impl PlannerSettings {
         }
         if !(self.min_cover_m.is_finite() && self.min_cover_m >= 0.0) {
             return bad("min_cover_m", ">= 0", self.min_cover_m);
+        }
+        for (k, v) in [
+            ("max_below_closure_c", self.max_below_closure_c),
+            (
+                "max_cooling_rate_c_per_day",
+                self.max_cooling_rate_c_per_day,
+            ),
+            ("max_zone_gradient_c", self.max_zone_gradient_c),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(k, "> 0", v);
+            }
         }
         if !(self.max_supercooling_c.is_finite() && (0.0..=10.0).contains(&self.max_supercooling_c))
         {

@@ -25,6 +25,7 @@ mod material_laws;
 mod mechanics_staged;
 mod mesh_generators;
 mod out_safety;
+mod planner_limits;
 mod planner_supercool;
 mod report_files;
 mod reproducible;

@@ -185,6 +185,7 @@ fn fixture() -> Plan {
             verified: Some((Verdict::Marginal, Some(0.61))),
             note: NOTE_22.into(),
             verified_history: None,
+            limited: Vec::new(),
         }),
     );
     let delayed = zone(
@@ -208,6 +209,7 @@ fn fixture() -> Plan {
             verified: Some((Verdict::Marginal, Some(0.55))),
             note: "no supercooling within 3 °C opens it enough".into(),
             verified_history: None,
+            limited: Vec::new(),
         }),
     );
     let mut hopeless = zone(
@@ -226,6 +228,7 @@ fn fixture() -> Plan {
             verified: None,
             note: NOTE_32.into(),
             verified_history: None,
+            limited: Vec::new(),
         }),
     );
     hopeless.cover_m = None;
