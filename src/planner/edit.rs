@@ -51,14 +51,44 @@ fn stage_to_edit(
         .map(|(i, _)| i)
 }
 
-/// The coldest cooling water a site's chillers deliver [°C].
+/// The coldest cooling water a site's chillers deliver [°C], unless the
+/// scene says otherwise (`planner.min_water_temp_c`).
 pub const MIN_WATER_C: f64 = 4.0;
+
+/// [`supercool_with_water`] with the default coldest water, [`MIN_WATER_C`].
+pub fn supercool(
+    schedules: &Schedules,
+    layout: &DamLayout,
+    zones: &[Supercool],
+    lifts_above: u32,
+) -> (Schedules, Vec<ZoneId>) {
+    supercool_with_water(schedules, layout, zones, lifts_above, MIN_WATER_C)
+}
+
+/// Whether a zone's supercooling meets the coldest water allowed: the
+/// water of one of the stages it edits cannot be lowered by its full ΔT.
+pub fn water_held(
+    schedules: &Schedules,
+    layout: &DamLayout,
+    z: &Supercool,
+    lifts_above: u32,
+    coldest_c: f64,
+) -> bool {
+    cooled_lifts(layout, z, lifts_above)
+        .into_iter()
+        .any(|(b, l)| {
+            stage_to_edit(&schedules.cooling, b, l, z.planned)
+                .is_some_and(|row| schedules.cooling[row].water_temp_c - z.delta_c < coldest_c)
+        })
+}
 
 /// Applies supercooling to `schedules`. A stage row serving several zones
 /// takes the largest ΔT and the latest of their grouting dates; rows are
-/// edited whole (their cooled region stays what the site planned). The water
-/// is colder by ΔT (not below [`MIN_WATER_C`], and at least 1 °C below the
-/// new target) and the target lower by ΔT. The past is not re-cooled:
+/// edited whole (their cooled region stays what the site planned). The
+/// target is lower by ΔT, and the water colder by ΔT, at least 1 °C below
+/// the new target, but never colder than `coldest_c` (nor warmer than it
+/// was: a site already below that limit keeps its water). The past is not
+/// re-cooled:
 /// - a stage starting on or after `from` is edited in place and runs until
 ///   its new target or the grouting date;
 /// - a stage that ends (by its end date) before the grouting date is followed
@@ -72,11 +102,12 @@ pub const MIN_WATER_C: f64 = 4.0;
 ///
 /// Returns the edited schedules and the zones none of whose lifts could be
 /// edited.
-pub fn supercool(
+pub fn supercool_with_water(
     schedules: &Schedules,
     layout: &DamLayout,
     zones: &[Supercool],
     lifts_above: u32,
+    coldest_c: f64,
 ) -> (Schedules, Vec<ZoneId>) {
     // row → (ΔT, latest grouting date, from)
     let mut per_row: BTreeMap<usize, (f64, NaiveDate, NaiveDate)> = BTreeMap::new();
@@ -103,8 +134,8 @@ pub fn supercool(
         let c = &mut out.cooling[row];
         let target = c.target_temp_c.unwrap_or(0.0) - dt;
         let water = (c.water_temp_c - dt)
-            .max(MIN_WATER_C)
             .min(target - 1.0)
+            .max(coldest_c.min(c.water_temp_c))
             .max(0.0);
         if c.start >= from {
             c.target_temp_c = Some(target);

@@ -14,6 +14,10 @@
 //!   above that) more than `max_zone_gradient_c` warmer than the zone below
 //!   it, on the grouting day.
 //!
+//! The fourth limit, the coldest water (`min_water_temp_c`), is kept by the
+//! edit itself (`edit::supercool_with_water`), and the search says when it
+//! held a zone's water.
+//!
 //! A remedy breaks a limit when its run is past the limit (by more than
 //! [`SLACK`]) where the baseline is not: the remedy is what crosses it.
 //! Where the baseline's own schedule is past the limit already (fresh,

@@ -110,7 +110,7 @@ impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
 }
 
 /// What a search part's answer depends on besides the schedules: the as-of
-/// date, the settings, the flagged zones' readiness on their dates (not
+/// date, the settings (but the verification's limits), the flagged zones' readiness on their dates (not
 /// whether they re-open later: the baseline's end decides that) and the
 /// grouting dates of the zones below them (the bottom-up rule reads them,
 /// whatever the date).
@@ -132,7 +132,15 @@ fn search_key(
             ..z.clone()
         })
         .collect();
-    digest(&(as_of, rules.settings, on_their_dates, below))
+    // The limits read only by the verification are in its own key: a
+    // tighter limit re-runs the verification, not the searches.
+    let searched = PlannerSettings {
+        max_below_closure_c: 0.0,
+        max_cooling_rate_c_per_day: 0.0,
+        max_zone_gradient_c: 0.0,
+        ..rules.settings.clone()
+    };
+    digest(&(as_of, searched, on_their_dates, below))
 }
 
 /// Searches remedies for the `flagged` zones; `to_grout` are all zones still
@@ -167,7 +175,7 @@ pub fn search(
         .collect();
     let sorted: BTreeMap<ZoneId, &Remedy> = remedies.iter().map(|(k, r)| (*k, r)).collect();
     let grouting: BTreeMap<ZoneId, Day> = grout.into_iter().collect();
-    let vkey = digest(&(key, to_grout, sorted, grouting));
+    let vkey = digest(&(key, rules.settings, to_grout, sorted, grouting));
     let old = last.and_then(|(m, first)| m.verified.as_ref().filter(|p| p.valid(vkey, first)));
     let (verified, schedules, lineage) = match old {
         Some(p) => {
@@ -481,7 +489,9 @@ fn remedied_schedules(
     if cooled.is_empty() && moves.is_empty() {
         return None;
     }
-    let (cooled_s, _) = edit::supercool(base, ctx.layout, &cooled, lifts_above(ctx.rules));
+    let coldest = ctx.rules.settings.min_water_temp_c;
+    let (cooled_s, _) =
+        edit::supercool_with_water(base, ctx.layout, &cooled, lifts_above(ctx.rules), coldest);
     Some(edit::regrout(&cooled_s, &moves))
 }
 
@@ -659,7 +669,9 @@ fn supercool_search(
             .collect()
     };
     let layout = ctx.layout;
-    let build = |ks: &BTreeMap<ZoneId, u32>| edit::supercool(base, layout, &edits(ks), above);
+    let build = |ks: &BTreeMap<ZoneId, u32>| {
+        edit::supercool_with_water(base, layout, &edits(ks), above, s.min_water_temp_c)
+    };
 
     let mut brackets = bracket_at_max(ctx, &cands, k_max, &span, &build, &mut out)?;
     // Bracketed search on the grid, all zones in the same runs.
@@ -786,20 +798,37 @@ fn bracket_at_max(
                 },
             );
         } else {
-            out.insert(
-                key,
-                (
-                    None,
-                    format!(
-                        "even {:.2} °C of supercooling leaves it not groutable ({})",
-                        k_max as f64 * step,
-                        r.reasons()
-                    ),
-                ),
+            let why = format!(
+                "even {:.2} °C of supercooling leaves it not groutable ({}){}",
+                k_max as f64 * step,
+                r.reasons(),
+                water_note(ctx, z, k_max as f64 * step)
             );
+            out.insert(key, (None, why));
         }
     }
     Ok(brackets)
+}
+
+/// "; the coldest water allowed, 8.0 °C, held its water" when that limit
+/// kept a stage the zone's supercooling edits from its full ΔT.
+fn water_note(ctx: &Ctx, z: &ZoneReadiness, delta_c: f64) -> String {
+    let s = ctx.rules.settings;
+    let sc = Supercool {
+        zone: z.zone_id(),
+        delta_c,
+        planned: z.planned,
+        from: ctx.as_of,
+    };
+    let above = lifts_above(ctx.rules);
+    if edit::water_held(&ctx.runner.base, ctx.layout, &sc, above, s.min_water_temp_c) {
+        format!(
+            "; the coldest water allowed, {:.1} °C, held its water (site limit)",
+            s.min_water_temp_c
+        )
+    } else {
+        String::new()
+    }
 }
 
 fn delay_search(

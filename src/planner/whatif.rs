@@ -91,9 +91,11 @@ pub fn edit_schedules(
             planned: w.date,
             from: as_of,
         }];
-        let (cooled, not_editable) = edit::supercool(&s, layout, &sc, lifts_above(rules));
+        let coldest = rules.settings.min_water_temp_c;
+        let (cooled, not_editable) =
+            edit::supercool_with_water(&s, layout, &sc, lifts_above(rules), coldest);
         // The zone's own lifts alone: is their stage editable?
-        let (_, own_not_editable) = edit::supercool(&s, layout, &sc, 0);
+        let (_, own_not_editable) = edit::supercool_with_water(&s, layout, &sc, 0, coldest);
         applied = if !not_editable.is_empty() {
             Applied::No
         } else if !own_not_editable.is_empty() {

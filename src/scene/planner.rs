@@ -51,6 +51,9 @@ pub struct PlannerSettings {
     /// more than this at grouting [°C]; default 4 (an estimate of common
     /// specifications; set the project's).
     pub max_zone_gradient_c: f64,
+    /// Site limit: the coldest cooling water the chillers deliver [°C];
+    /// default 4. Supercooling never lowers a stage's water below it.
+    pub min_water_temp_c: f64,
     /// Longest delay searched [days]; default 60.
     pub max_delay_days: u32,
     /// Cost of 1 °C of supercooling of one zone, in the same unit as
@@ -82,6 +85,7 @@ impl Default for PlannerSettings {
             max_below_closure_c: 3.0,
             max_cooling_rate_c_per_day: 0.5,
             max_zone_gradient_c: 4.0,
+            min_water_temp_c: 4.0,
             max_delay_days: 60,
             cost_per_degree_c: 1.0,
             cost_per_day: 0.2,
@@ -105,6 +109,32 @@ impl PlannerSettings {
                 a[1] + (b[1] - a[1]) * (z - a[0]) / (b[0] - a[0])
             }
         }
+    }
+
+    /// The site limits on supercooling.
+    fn validate_limits(&self) -> Result<(), Invalid> {
+        let bad = |k: &str, what: &str, v: f64| {
+            Err(Invalid::new(
+                format!("planner.{k}"),
+                format!("planner.{k} must be {what}, got {v}"),
+            ))
+        };
+        if !(self.min_water_temp_c.is_finite() && (0.0..=30.0).contains(&self.min_water_temp_c)) {
+            return bad("min_water_temp_c", "within 0..30 °C", self.min_water_temp_c);
+        }
+        for (k, v) in [
+            ("max_below_closure_c", self.max_below_closure_c),
+            (
+                "max_cooling_rate_c_per_day",
+                self.max_cooling_rate_c_per_day,
+            ),
+            ("max_zone_gradient_c", self.max_zone_gradient_c),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(k, "> 0", v);
+            }
+        }
+        Ok(())
     }
 
     /// Checks the values; the error names the key and what was expected.
@@ -158,18 +188,7 @@ impl PlannerSettings {
         if !(self.min_cover_m.is_finite() && self.min_cover_m >= 0.0) {
             return bad("min_cover_m", ">= 0", self.min_cover_m);
         }
-        for (k, v) in [
-            ("max_below_closure_c", self.max_below_closure_c),
-            (
-                "max_cooling_rate_c_per_day",
-                self.max_cooling_rate_c_per_day,
-            ),
-            ("max_zone_gradient_c", self.max_zone_gradient_c),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(k, "> 0", v);
-            }
-        }
+        self.validate_limits()?;
         if !(self.max_supercooling_c.is_finite() && (0.0..=10.0).contains(&self.max_supercooling_c))
         {
             return bad(
