@@ -213,35 +213,6 @@ fn reversals(history: &[Vec<u8>]) -> (usize, usize) {
 
 // ------------------------------------------------------------- builders
 
-fn set_joints(sc: &mut Scene, text: &str) {
-    let j: toml::Table = toml::from_str(&format!("[joints]\n{text}")).unwrap();
-    sc.joints = j["joints"].clone().try_into().unwrap();
-}
-
-/// Rollers on the faces of the bounding box: the normal component on the
-/// x and y faces and the vertical one on the bottom (a column in uniaxial
-/// strain, free on top).
-fn column_supports(mesh: &Mesh) -> Supports {
-    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-    for p in &mesh.nodes {
-        for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
-    let mut fixed = vec![];
-    for (i, p) in mesh.nodes.iter().enumerate() {
-        for d in 0..3 {
-            let on_lo = (p[d] - lo[d]).abs() < 1e-9;
-            let on_hi = (p[d] - hi[d]).abs() < 1e-9;
-            if (d < 2 && (on_lo || on_hi)) || (d == 2 && on_lo) {
-                fixed.push((i as u32, d as u8));
-            }
-        }
-    }
-    Supports { fixed }
-}
-
 /// Mean over the Gauss points of element `e`'s stress component `c`.
 fn mean_stress(m: &MechanicsModel, e: usize, c: usize) -> f64 {
     m.state.stress[e].iter().map(|g| g[c]).sum::<f64>() / 8.0
@@ -292,7 +263,7 @@ fn column_on_rock(geometry: &str, rock_modulus: Option<f64>) -> ([f64; 3], Healt
     if let Some(r) = settings.rock.as_mut() {
         r.modulus_pa = e_rock;
     }
-    let mut m = MechanicsModel::new(&mesh, &settings, &column_supports(&mesh)).unwrap();
+    let mut m = MechanicsModel::new(&mesh, &settings, &rollers(&mesh, true, true, false)).unwrap();
     let n_lifts = mesh.blocks[0].n_lifts;
     for lift in 1..=n_lifts {
         m.pour(1, lift, 0.0);
@@ -611,7 +582,7 @@ fn a_lift_poured_on_two_year_old_concrete() {
     let (e_old, e_new) = (law.modulus(730.5), law.modulus(0.5));
     let ratio = e_old / e_new;
     assert!((900.0..1100.0).contains(&ratio), "modulus ratio {ratio}");
-    let mut m = MechanicsModel::new(&mesh, &settings, &column_supports(&mesh)).unwrap();
+    let mut m = MechanicsModel::new(&mesh, &settings, &rollers(&mesh, true, true, false)).unwrap();
     let t20 = vec![20.0; mesh.n_thermal_dofs];
     let t30 = vec![30.0; mesh.n_thermal_dofs];
     m.pour(1, 1, 0.0);

@@ -19,11 +19,14 @@ const MECH: &str =
 
 /// Both blocks poured on day 0 at 20 °C, then a uniform ΔT in one day.
 fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
-    let joints = format!("[joints]\nzone_height_m = 3.0\nmu_static = 0.0\nmu_kinetic = 0.0\ninitial_gap_m = {gap0}\n");
     let text_geometry = blocks_geometry(2, L_BLOCK, 5.0, 1, 2, 2);
     let mut sc = scene_with_concrete("\"thermal_strain\", \"joints\"", &text_geometry, "", MECH);
-    let j: toml::Table = toml::from_str(&joints).unwrap();
-    sc.joints = j["joints"].clone().try_into().unwrap();
+    set_joints(
+        &mut sc,
+        &format!(
+            "zone_height_m = 3.0\nmu_static = 0.0\nmu_kinetic = 0.0\ninitial_gap_m = {gap0}\n"
+        ),
+    );
     let mesh = blocks_mesh(&sc);
     let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &walls_frictionless_base(&mesh)).unwrap();

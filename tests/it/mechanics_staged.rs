@@ -4,8 +4,7 @@ use crate::common;
 
 use common::*;
 use groutready::material::AdiabaticRise;
-use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
-use groutready::mesh::Mesh;
+use groutready::mechanics::{MechanicsModel, MechanicsSettings};
 use groutready::thermal::boundary::AirTemperature;
 use groutready::thermal::{ThermalModel, ThermalSettings};
 
@@ -14,33 +13,6 @@ const MECH: &str =
 
 fn mech_scene(effects: &str, geometry: &str, extra: &str) -> groutready::scene::Scene {
     scene_with_concrete(effects, geometry, extra, MECH)
-}
-
-/// Rollers on the faces of the bounding box: `sides` fixes the normal
-/// component on the x and y faces, `bottom`/`top` the vertical one.
-fn rollers(mesh: &Mesh, sides: bool, bottom: bool, top: bool) -> Supports {
-    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
-    for p in &mesh.nodes {
-        for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
-    let mut fixed = vec![];
-    for (i, p) in mesh.nodes.iter().enumerate() {
-        for d in 0..3 {
-            let on_lo = (p[d] - lo[d]).abs() < 1e-9;
-            let on_hi = (p[d] - hi[d]).abs() < 1e-9;
-            let fix = match d {
-                2 => (bottom && on_lo) || (top && on_hi),
-                _ => sides && (on_lo || on_hi),
-            };
-            if fix {
-                fixed.push((i as u32, d as u8));
-            }
-        }
-    }
-    Supports { fixed }
 }
 
 #[test]

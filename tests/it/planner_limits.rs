@@ -77,15 +77,19 @@ fn plan_with(change: impl Fn(&mut PlannerSettings)) -> (Plan, String) {
     (p, md)
 }
 
+/// The remedy the plan gives zone 4 of joint 1.
+fn remedy_of_zone_1_4(p: &Plan) -> &groutready::planner::Remedy {
+    p.zones
+        .iter()
+        .find(|z| z.zone_id() == ZoneId::new(1, 4))
+        .and_then(|z| z.remedy.as_ref())
+        .expect("zone 4 of joint 1 is flagged and has a remedy")
+}
+
 /// Zone 4 of joint 1 is not supercooled: the delay is proposed, and the
 /// limit that stopped it is named in the remedy and the report.
 fn stopped_by(p: &Plan, md: &str, limit: &str) {
-    let z = p
-        .zones
-        .iter()
-        .find(|z| z.zone_id() == ZoneId::new(1, 4))
-        .unwrap();
-    let r = z.remedy.as_ref().expect("a remedy");
+    let r = remedy_of_zone_1_4(p);
     assert_eq!(r.choice, RemedyChoice::Delay, "{}", r.note);
     assert!(r.supercool.is_some(), "the search found a supercooling");
     assert!(
@@ -109,13 +113,7 @@ fn stopped_by(p: &Plan, md: &str, limit: &str) {
 #[test]
 fn without_a_tighter_limit_the_zone_is_supercooled() {
     let (_, opened) = base();
-    let z = opened
-        .plan
-        .zones
-        .iter()
-        .find(|z| z.zone_id() == ZoneId::new(1, 4))
-        .unwrap();
-    let r = z.remedy.as_ref().unwrap();
+    let r = remedy_of_zone_1_4(&opened.plan);
     assert_eq!(r.choice, RemedyChoice::Supercool, "{}", r.note);
     assert!(r.limited.is_empty());
 }
@@ -189,12 +187,7 @@ fn supercooling_never_takes_the_water_below_the_coldest_allowed() {
 #[test]
 fn the_coldest_water_stops_it() {
     let (p, md) = plan_with(|s| s.min_water_temp_c = 8.0);
-    let z = p
-        .zones
-        .iter()
-        .find(|z| z.zone_id() == ZoneId::new(1, 4))
-        .unwrap();
-    let r = z.remedy.as_ref().unwrap();
+    let r = remedy_of_zone_1_4(&p);
     assert_eq!(r.choice, RemedyChoice::Delay, "{}", r.note);
     assert!(r.supercool.is_none());
     let why = "the coldest water allowed, 8.0 °C, held its water (site limit)";

@@ -301,3 +301,41 @@ pub fn small_plan() -> &'static Planned {
         )
     })
 }
+
+/// Rollers on the faces of the bounding box: `sides` fixes the normal
+/// component on the x and y faces, `bottom`/`top` the vertical one.
+pub fn rollers(
+    mesh: &Mesh,
+    sides: bool,
+    bottom: bool,
+    top: bool,
+) -> groutready::mechanics::Supports {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in &mesh.nodes {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let mut fixed = vec![];
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        for d in 0..3 {
+            let on_lo = (p[d] - lo[d]).abs() < 1e-9;
+            let on_hi = (p[d] - hi[d]).abs() < 1e-9;
+            let fix = match d {
+                2 => (bottom && on_lo) || (top && on_hi),
+                _ => sides && (on_lo || on_hi),
+            };
+            if fix {
+                fixed.push((i as u32, d as u8));
+            }
+        }
+    }
+    groutready::mechanics::Supports { fixed }
+}
+
+/// Replaces the scene's `[joints]` table with `text` (its keys).
+pub fn set_joints(sc: &mut Scene, text: &str) {
+    let j: toml::Table = toml::from_str(&format!("[joints]\n{text}")).unwrap();
+    sc.joints = j["joints"].clone().try_into().unwrap();
+}
