@@ -58,6 +58,7 @@
 pub mod arch;
 pub mod blocks;
 pub mod geometry;
+pub mod import;
 mod grid;
 pub mod vtu;
 

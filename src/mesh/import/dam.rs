@@ -1,0 +1,1 @@
+//! Placeholder: a RawMesh to a dam Mesh (being written).

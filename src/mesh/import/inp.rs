@@ -1,0 +1,1 @@
+//! Placeholder: the Abaqus/CalculiX reader and writer (being written).

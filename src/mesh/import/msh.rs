@@ -1,0 +1,1 @@
+//! Placeholder: the MSH 4.1 reader and writer (being written).
