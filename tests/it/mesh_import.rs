@@ -8,7 +8,7 @@ use std::path::Path;
 use groutready::fem::hex8::NODES;
 use groutready::mesh::geometry::BlocksGeometry;
 use groutready::mesh::import::{dam, RawMesh};
-use groutready::mesh::{generate_blocks, Mesh, Part, HEX_FACES};
+use groutready::mesh::{generate_blocks, Mesh, Part, SurfaceKind, HEX_FACES};
 use groutready::scene::Scene;
 
 /// A model scene's generated mesh with its lift and zone heights.
@@ -245,6 +245,30 @@ fn named_lifts_are_checked() {
     );
 }
 
+/// Node groups `far` and `air` override the kind of the faces they hold.
+#[test]
+fn node_groups_override_surface_kinds() {
+    let (m, lift, zone) = generated("two_blocks.toml");
+    let mut raw = RawMesh::from_mesh(&m, "x");
+    let on = |pred: &dyn Fn([f64; 3]) -> bool| -> Vec<u32> {
+        (0..m.nodes.len() as u32).filter(|&n| pred(m.nodes[n as usize])).collect()
+    };
+    raw.node_groups.insert("far".into(), on(&|p| p[1] == 0.0 && p[2] <= 9.0));
+    raw.node_groups.insert("air".into(), on(&|p| p[2] == 0.0));
+    let got = dam::build(&raw, lift, zone).unwrap();
+    assert_eq!(got.surfaces.len(), m.surfaces.len());
+    for (g, w) in got.surfaces.iter().zip(&m.surfaces) {
+        let el = m.elements[g.elem as usize];
+        let zs: Vec<f64> = HEX_FACES[g.face as usize].iter().map(|&c| m.nodes[el[c] as usize][2]).collect();
+        let want = match (g.face, zs.iter().cloned().fold(0.0, f64::max)) {
+            (2, top) if top <= 9.0 => SurfaceKind::Far,
+            (0, _) => SurfaceKind::Ground,
+            _ => w.kind,
+        };
+        assert_eq!((g.elem, g.face, g.kind), (w.elem, w.face, want));
+    }
+}
+
 // ---- malformed meshes ----
 
 /// The two blocks of models/two_blocks.toml (no rock, 4 × 2 elements per layer, 6 layers).
@@ -295,8 +319,8 @@ fn an_inverted_element_is_named() {
     raw.hexes[0].swap(6, 7);
     assert_eq!(
         error(&raw),
-        "two.msh: element 1: (block 1) is inverted or degenerate: its Jacobian determinant is -6.250e0 m³ at its \
-         corner node 23 (5.000, 5.000, 3.000) m in every corner order (its corners must bound a convex hexahedron)"
+        "two.msh: element 1: (block 1) is inverted or degenerate: its Jacobian determinant is -9.375e0 m³ at its \
+         corner node 41 (0.000, 5.000, 3.000) m in every corner order (its corners must bound a convex hexahedron)"
     );
 }
 
@@ -318,7 +342,7 @@ fn a_non_conforming_joint_is_found() {
     assert_eq!(
         error(&raw),
         "pair.inp: non-conforming joint between block 1 and block 2: the face of element 2 (block 1) centred at \
-         (20.000, 2.500, 1.500) m lies on the face of element 50 (block 2) but does not match it node for node"
+         (20.000, 2.500, 1.500) m lies on the face of element 25 (block 2) but does not match it node for node"
     );
 }
 
@@ -358,7 +382,7 @@ fn a_floating_block_is_named() {
     }
     assert_eq!(
         error(&raw),
-        "two.msh: block 2 is floating: its element 5 at (26.000, 2.500, 10.500) m shares no face, directly or \
+        "two.msh: block 2: is floating: its element 5 at (23.500, 2.500, 10.500) m shares no face, directly or \
          through other blocks, with the lowest concrete level (z = 0.000 m)"
     );
 }
@@ -366,7 +390,8 @@ fn a_floating_block_is_named() {
 #[test]
 fn an_element_in_no_part_is_named() {
     let mut raw = two_blocks();
-    raw.element_groups.get_mut("block_1").unwrap().retain(|&e| e != 5);
+    // Element index 5 is block 2's second element of the first layer.
+    raw.element_groups.get_mut("block_2").unwrap().retain(|&e| e != 5);
     assert_eq!(
         error(&raw),
         "two.msh: element 6: is in no part: every element must be in one element group block_<n> or rock"
@@ -376,7 +401,9 @@ fn an_element_in_no_part_is_named() {
 #[test]
 fn an_element_in_two_parts_is_named() {
     let mut raw = two_blocks();
-    raw.element_groups.get_mut("block_2").unwrap().insert(0, 5);
+    let b1 = raw.element_groups.get_mut("block_1").unwrap();
+    b1.push(5);
+    b1.sort_unstable();
     assert_eq!(
         error(&raw),
         "two.msh: element 6: is in two parts, block_1 and block_2 (an element is in one block_<n> or in rock)"

@@ -519,7 +519,7 @@ fn orient(raw: &RawMesh, part: &[u32], n_blocks: u32) -> Result<Vec<[u32; 8]>, D
         let det_g = dot(g[0], cross(g[1], g[2]));
         let mut best: Option<(f64, f64, usize)> = None;
         for (i, s) in syms.iter().enumerate() {
-            if !(s.det * det_g > 0.0) {
+            if det_g.is_nan() || s.det * det_g <= 0.0 {
                 continue;
             }
             let zeta = g[s.axes[2]].map(|v| s.signs[2] * v);
