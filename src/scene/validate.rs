@@ -29,7 +29,10 @@ pub(super) fn validate(s: &Scene) -> Check {
         // The file's blocks, rock and layers are checked when it is read (mesh::import::dam).
         Geometry::Mesh(g) => {
             if g.file.trim().is_empty() {
-                return Err(SceneError::invalid("geometry.file", "geometry.file must name a mesh file".to_string()));
+                return Err(SceneError::invalid(
+                    "geometry.file",
+                    "geometry.file must name a mesh file".to_string(),
+                ));
             }
         }
     }

@@ -81,8 +81,18 @@ impl Lcg {
 /// of the rotated element is corner `r[c]` of the original.
 fn rotations() -> Vec<[usize; 8]> {
     let mut out = Vec::new();
-    for axes in [[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [1, 0, 2], [2, 1, 0]] {
-        let parity = if axes[0] == 0 && axes[1] == 1 || axes[0] == 1 && axes[1] == 2 || axes[0] == 2 && axes[1] == 0 {
+    for axes in [
+        [0, 1, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [0, 2, 1],
+        [1, 0, 2],
+        [2, 1, 0],
+    ] {
+        let parity = if axes[0] == 0 && axes[1] == 1
+            || axes[0] == 1 && axes[1] == 2
+            || axes[0] == 2 && axes[1] == 0
+        {
             1.0
         } else {
             -1.0
@@ -157,13 +167,24 @@ fn bits(p: [f64; 3]) -> [u64; 3] {
     p.map(f64::to_bits)
 }
 
-fn face_pair_set(m: &Mesh) -> Vec<(u32, u32, u32, Vec<[u64; 3]>, Vec<[u64; 3]>)> {
+/// (joint, zone, layer, nodes_a's points, nodes_b's points) of a face pair.
+type PairKey = (u32, u32, u32, Vec<[u64; 3]>, Vec<[u64; 3]>);
+
+fn face_pair_set(m: &Mesh) -> Vec<PairKey> {
     let mut v: Vec<_> = m
         .face_pairs
         .iter()
         .map(|fp| {
-            let a = fp.nodes_a.iter().map(|&n| bits(m.nodes[n as usize])).collect();
-            let b = fp.nodes_b.iter().map(|&n| bits(m.nodes[n as usize])).collect();
+            let a = fp
+                .nodes_a
+                .iter()
+                .map(|&n| bits(m.nodes[n as usize]))
+                .collect();
+            let b = fp
+                .nodes_b
+                .iter()
+                .map(|&n| bits(m.nodes[n as usize]))
+                .collect();
             (fp.joint, fp.zone, fp.layer, a, b)
         })
         .collect();
@@ -191,23 +212,40 @@ fn surface_set(m: &Mesh) -> Vec<(Vec<[u64; 3]>, String)> {
 
 #[test]
 fn a_file_s_differences_give_the_same_dam() {
-    for (scene, seed) in [("small_dam_joints.toml", 7), ("demo_arch.toml", 11), ("two_blocks.toml", 3)] {
+    for (scene, seed) in [
+        ("small_dam_joints.toml", 7),
+        ("demo_arch.toml", 11),
+        ("two_blocks.toml", 3),
+    ] {
         let (m, lift, zone) = generated(scene);
         let raw = as_a_file_says(&m, seed);
-        assert!(raw.nodes.len() < m.nodes.len(), "{scene}: joint copies merged");
+        assert!(
+            raw.nodes.len() < m.nodes.len(),
+            "{scene}: joint copies merged"
+        );
         let got = dam::build(&raw, lift, zone).unwrap();
-        assert_eq!(got.nodes.len(), m.nodes.len(), "{scene}: joint copies restored");
+        assert_eq!(
+            got.nodes.len(),
+            m.nodes.len(),
+            "{scene}: joint copies restored"
+        );
         assert_eq!(got.n_thermal_dofs, m.n_thermal_dofs);
         assert_eq!(got.layer_z, m.layer_z);
         assert_eq!(got.layers_per_lift, m.layers_per_lift);
         assert_eq!(got.blocks, m.blocks);
-        assert_eq!(face_pair_set(&got), face_pair_set(&m), "{scene}: face pairs");
-        let zone_key = |z: &groutready::mesh::Zone| (z.joint, z.zone, z.z_bottom, z.z_top, z.pairs.len());
+        assert_eq!(
+            face_pair_set(&got),
+            face_pair_set(&m),
+            "{scene}: face pairs"
+        );
+        let zone_key =
+            |z: &groutready::mesh::Zone| (z.joint, z.zone, z.z_bottom, z.z_top, z.pairs.len());
         assert_eq!(
             got.zones.iter().map(zone_key).collect::<Vec<_>>(),
             m.zones.iter().map(zone_key).collect::<Vec<_>>()
         );
-        let point_key = |p: &groutready::mesh::ZoneSite| (p.joint, p.zone, p.point, p.s, p.t, bits(p.xyz));
+        let point_key =
+            |p: &groutready::mesh::ZoneSite| (p.joint, p.zone, p.point, p.s, p.t, bits(p.xyz));
         assert_eq!(
             got.zone_points.iter().map(point_key).collect::<Vec<_>>(),
             m.zone_points.iter().map(point_key).collect::<Vec<_>>()
@@ -215,10 +253,14 @@ fn a_file_s_differences_give_the_same_dam() {
         assert_eq!(surface_set(&got), surface_set(&m), "{scene}: surfaces");
         // Each element is the generator's, corner for corner, wherever it went.
         let corners = |m: &Mesh, e: usize| m.elements[e].map(|n| bits(m.nodes[n as usize]));
-        let mut want: Vec<_> = (0..m.elements.len()).map(|e| (corners(&m, e), m.parts[e])).collect();
-        let mut have: Vec<_> = (0..got.elements.len()).map(|e| (corners(&got, e), got.parts[e])).collect();
-        want.sort_by(|a, b| a.0.cmp(&b.0));
-        have.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut want: Vec<_> = (0..m.elements.len())
+            .map(|e| (corners(&m, e), m.parts[e]))
+            .collect();
+        let mut have: Vec<_> = (0..got.elements.len())
+            .map(|e| (corners(&got, e), got.parts[e]))
+            .collect();
+        want.sort_by_key(|a| a.0);
+        have.sort_by_key(|a| a.0);
         assert!(want == have, "{scene}: elements and parts");
     }
 }
@@ -237,8 +279,15 @@ fn named_lifts_are_checked() {
         }
     }
     assert_same(&dam::build(&raw, lift, zone).unwrap(), &m);
-    let moved = raw.element_groups.get_mut("block_1_lift_1").unwrap().remove(0);
-    raw.element_groups.get_mut("block_1_lift_2").unwrap().insert(0, moved);
+    let moved = raw
+        .element_groups
+        .get_mut("block_1_lift_1")
+        .unwrap()
+        .remove(0);
+    raw.element_groups
+        .get_mut("block_1_lift_2")
+        .unwrap()
+        .insert(0, moved);
     assert_eq!(
         dam::build(&raw, lift, zone).unwrap_err().to_string(),
         "two.msh: element 1: is in block_1_lift_2 but lies in lift 1 of block 1 (z = 0.000 … 3.000 m)"
@@ -251,15 +300,21 @@ fn node_groups_override_surface_kinds() {
     let (m, lift, zone) = generated("two_blocks.toml");
     let mut raw = RawMesh::from_mesh(&m, "x");
     let on = |pred: &dyn Fn([f64; 3]) -> bool| -> Vec<u32> {
-        (0..m.nodes.len() as u32).filter(|&n| pred(m.nodes[n as usize])).collect()
+        (0..m.nodes.len() as u32)
+            .filter(|&n| pred(m.nodes[n as usize]))
+            .collect()
     };
-    raw.node_groups.insert("far".into(), on(&|p| p[1] == 0.0 && p[2] <= 9.0));
+    raw.node_groups
+        .insert("far".into(), on(&|p| p[1] == 0.0 && p[2] <= 9.0));
     raw.node_groups.insert("air".into(), on(&|p| p[2] == 0.0));
     let got = dam::build(&raw, lift, zone).unwrap();
     assert_eq!(got.surfaces.len(), m.surfaces.len());
     for (g, w) in got.surfaces.iter().zip(&m.surfaces) {
         let el = m.elements[g.elem as usize];
-        let zs: Vec<f64> = HEX_FACES[g.face as usize].iter().map(|&c| m.nodes[el[c] as usize][2]).collect();
+        let zs: Vec<f64> = HEX_FACES[g.face as usize]
+            .iter()
+            .map(|&c| m.nodes[el[c] as usize][2])
+            .collect();
         let want = match (g.face, zs.iter().cloned().fold(0.0, f64::max)) {
             (2, top) if top <= 9.0 => SurfaceKind::Far,
             (0, _) => SurfaceKind::Ground,
@@ -302,13 +357,18 @@ fn block(n_blocks: u32, elements_across: u32, n_lifts: u32, lift: f64) -> Mesh {
 fn side_by_side(a: &Mesh, b: &Mesh, shift: [f64; 3]) -> RawMesh {
     let mut raw = RawMesh::from_mesh(a, "pair.inp");
     let off = raw.nodes.len() as u32;
-    raw.nodes
-        .extend(b.nodes.iter().map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]));
+    raw.nodes.extend(
+        b.nodes
+            .iter()
+            .map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]),
+    );
     let first = raw.hexes.len() as u32;
-    raw.hexes.extend(b.elements.iter().map(|h| h.map(|n| n + off)));
+    raw.hexes
+        .extend(b.elements.iter().map(|h| h.map(|n| n + off)));
     raw.node_ids = (1..=raw.nodes.len() as u64).collect();
     raw.elem_ids = (1..=raw.hexes.len() as u64).collect();
-    raw.element_groups.insert("block_2".into(), (first..raw.hexes.len() as u32).collect());
+    raw.element_groups
+        .insert("block_2".into(), (first..raw.hexes.len() as u32).collect());
     raw
 }
 
@@ -391,7 +451,10 @@ fn a_floating_block_is_named() {
 fn an_element_in_no_part_is_named() {
     let mut raw = two_blocks();
     // Element index 5 is block 2's second element of the first layer.
-    raw.element_groups.get_mut("block_2").unwrap().retain(|&e| e != 5);
+    raw.element_groups
+        .get_mut("block_2")
+        .unwrap()
+        .retain(|&e| e != 5);
     assert_eq!(
         error(&raw),
         "two.msh: element 6: is in no part: every element must be in one element group block_<n> or rock"
@@ -421,7 +484,8 @@ fn a_gap_in_block_numbers_is_named() {
          2, … from the left bank"
     );
     raw.element_groups.clear();
-    raw.element_groups.insert("concrete".into(), (0..raw.hexes.len() as u32).collect());
+    raw.element_groups
+        .insert("concrete".into(), (0..raw.hexes.len() as u32).collect());
     assert_eq!(
         error(&raw),
         "two.msh: no element group block_<n>: the dam's blocks must be element groups block_1, block_2, … from \

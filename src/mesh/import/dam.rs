@@ -68,8 +68,8 @@ use thiserror::Error;
 use super::RawMesh;
 use crate::fem::quad4;
 use crate::mesh::{
-    grid, hex_jacobian_det, BlockInfo, FacePair, Mesh, MeshError, Part, SurfaceFace,
-    SurfaceKind, Zone, ZoneSite, HEX_FACES,
+    grid, hex_jacobian_det, BlockInfo, FacePair, Mesh, MeshError, Part, SurfaceFace, SurfaceKind,
+    Zone, ZoneSite, HEX_FACES,
 };
 use crate::vocab::ZonePoint;
 
@@ -115,12 +115,11 @@ pub enum DamMeshError {
 /// Build the dam mesh of `raw` with lifts of `lift_height` m and grouting
 /// zones of `zone_height` m (a whole number of lifts); see the module docs.
 pub fn build(raw: &RawMesh, lift_height: f64, zone_height: f64) -> Result<Mesh, DamMeshError> {
-    let zone_lifts = grid::zone_lifts(lift_height, zone_height).map_err(|source| {
-        DamMeshError::Mesh {
+    let zone_lifts =
+        grid::zone_lifts(lift_height, zone_height).map_err(|source| DamMeshError::Mesh {
             file: raw.source.clone(),
             source,
-        }
-    })?;
+        })?;
     check_raw(raw)?;
     let part = parts(raw)?;
     let n_blocks = part.iter().copied().max().unwrap_or(0);
@@ -246,7 +245,10 @@ fn check_raw(raw: &RawMesh) -> Result<(), DamMeshError> {
         ));
     }
     if raw.hexes.is_empty() {
-        return Err(dam_err(raw, "no hexahedra: a dam mesh is made of 8-node hexahedra".into()));
+        return Err(dam_err(
+            raw,
+            "no hexahedra: a dam mesh is made of 8-node hexahedra".into(),
+        ));
     }
     for (e, h) in raw.hexes.iter().enumerate() {
         for &n in h {
@@ -329,10 +331,10 @@ fn parts(raw: &RawMesh) -> Result<Vec<u32>, DamMeshError> {
                         raw,
                         e as usize,
                         format!(
-                            "is in two parts, {} and {} (an element is in one block_<n> or in rock)",
-                            group_name(q),
-                            group_name(p)
-                        ),
+                        "is in two parts, {} and {} (an element is in one block_<n> or in rock)",
+                        group_name(q),
+                        group_name(p)
+                    ),
                     ))
                 }
                 _ => *slot = Some(p),
@@ -368,7 +370,8 @@ fn parts(raw: &RawMesh) -> Result<Vec<u32>, DamMeshError> {
                 elem_err(
                     raw,
                     e,
-                    "is in no part: every element must be in one element group block_<n> or rock".into(),
+                    "is in no part: every element must be in one element group block_<n> or rock"
+                        .into(),
                 )
             })
         })
@@ -471,11 +474,20 @@ fn block_axes(raw: &RawMesh, part: &[u32], n_blocks: u32) -> (Vec<[f64; 3]>, Vec
         }
     }
     let centroid: Vec<[f64; 3]> = (0..nb)
-        .map(|b| [sum[b][0] / count[b].max(1) as f64, sum[b][1] / count[b].max(1) as f64, 0.0])
+        .map(|b| {
+            [
+                sum[b][0] / count[b].max(1) as f64,
+                sum[b][1] / count[b].max(1) as f64,
+                0.0,
+            ]
+        })
         .collect();
     let axis = (0..nb)
         .map(|b| {
-            let d = unit(sub(centroid[(b + 1).min(nb - 1)], centroid[b.saturating_sub(1)]));
+            let d = unit(sub(
+                centroid[(b + 1).min(nb - 1)],
+                centroid[b.saturating_sub(1)],
+            ));
             if nb == 1 || norm(d) == 0.0 {
                 [1.0, 0.0, 0.0]
             } else {
@@ -541,14 +553,24 @@ fn orient(raw: &RawMesh, part: &[u32], n_blocks: u32) -> Result<Vec<[u32; 8]>, D
 /// element's size), else the element is inverted or degenerate.
 fn check_jacobian(raw: &RawMesh, e: usize, part: u32, h: &[u32; 8]) -> Result<(), DamMeshError> {
     let x = coords(raw, h);
-    let lo = x.iter().fold([f64::INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].min(p[k])));
-    let hi = x.iter().fold([f64::NEG_INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].max(p[k])));
+    let lo = x
+        .iter()
+        .fold([f64::INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].min(p[k])));
+    let hi = x.iter().fold([f64::NEG_INFINITY; 3], |m, p| {
+        [0, 1, 2].map(|k| m[k].max(p[k]))
+    });
     let diag = norm(sub(hi, lo));
     let (corner, det) = crate::fem::hex8::NODES
         .iter()
         .enumerate()
         .map(|(c, r)| (c, hex_jacobian_det(&x, r[0], r[1], r[2])))
-        .fold((0, f64::INFINITY), |m, c| if c.1 < m.1 || c.1.is_nan() { c } else { m });
+        .fold((0, f64::INFINITY), |m, c| {
+            if c.1 < m.1 || c.1.is_nan() {
+                c
+            } else {
+                m
+            }
+        });
     if det.is_nan() || det <= 1e-12 * diag.powi(3) {
         let n = h[corner] as usize;
         return Err(elem_err(
@@ -862,13 +884,18 @@ impl<'a> Dam<'a> {
             .flat_map(|e| (0..6).map(move |f| (e, f)))
             .filter(|&(e, f)| adj[e][f].0 == NONE)
             .collect();
-        let quads: Vec<[[f64; 3]; 4]> = bound.iter().map(|&(e, f)| self.face_points(e, f)).collect();
+        let quads: Vec<[[f64; 3]; 4]> =
+            bound.iter().map(|&(e, f)| self.face_points(e, f)).collect();
         let diam = |q: &[[f64; 3]; 4]| norm(sub(q[2], q[0])).max(norm(sub(q[3], q[1])));
         let h = quads.iter().map(diam).sum::<f64>() / quads.len().max(1) as f64;
         let mut grid = Hash3::new(h.max(self.tol));
         for (i, q) in quads.iter().enumerate() {
-            let lo = q.iter().fold([f64::INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].min(p[k])));
-            let hi = q.iter().fold([f64::NEG_INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].max(p[k])));
+            let lo = q
+                .iter()
+                .fold([f64::INFINITY; 3], |m, p| [0, 1, 2].map(|k| m[k].min(p[k])));
+            let hi = q.iter().fold([f64::NEG_INFINITY; 3], |m, p| {
+                [0, 1, 2].map(|k| m[k].max(p[k]))
+            });
             grid.insert_box(lo.map(|v| v - self.tol), hi.map(|v| v + self.tol), i as u32);
         }
         for (i, q) in quads.iter().enumerate() {
@@ -929,12 +956,15 @@ impl<'a> Dam<'a> {
             .fold(f64::INFINITY, f64::min);
         let mut grounded = vec![false; ne];
         for e in 0..ne {
-            if (self.has_rock && self.part[e] == 0) || (!self.has_rock && bottom(e) <= z0 + self.tol_z) {
+            if (self.has_rock && self.part[e] == 0)
+                || (!self.has_rock && bottom(e) <= z0 + self.tol_z)
+            {
                 grounded[find(&mut parent, e as u32) as usize] = true;
             }
         }
         for b in 1..=self.n_blocks {
-            let Some(e) = (0..ne).find(|&e| self.part[e] == b && !grounded[find(&mut parent, e as u32) as usize])
+            let Some(e) = (0..ne)
+                .find(|&e| self.part[e] == b && !grounded[find(&mut parent, e as u32) as usize])
             else {
                 continue;
             };
@@ -965,7 +995,8 @@ impl<'a> Dam<'a> {
         for e in (0..ne).filter(|&e| self.part[e] > 0) {
             let mut z = [0.0; 2];
             for (side, name) in [(0, "bottom"), (1, "top")] {
-                let zs = [0, 1, 2, 3].map(|c| self.raw.nodes[self.corners[e][4 * side + c] as usize][2]);
+                let zs =
+                    [0, 1, 2, 3].map(|c| self.raw.nodes[self.corners[e][4 * side + c] as usize][2]);
                 let lo = zs.iter().copied().fold(f64::INFINITY, f64::min);
                 let hi = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                 if hi - lo > self.tol_z {
@@ -1002,7 +1033,10 @@ impl<'a> Dam<'a> {
                 continue;
             }
             let message = if lt <= lb {
-                format!("(block {}) its top face is not above its bottom face", self.part[e])
+                format!(
+                    "(block {}) its top face is not above its bottom face",
+                    self.part[e]
+                )
             } else {
                 let other = first_elem[lb + 1] as usize;
                 format!(
@@ -1023,7 +1057,12 @@ impl<'a> Dam<'a> {
 
     /// Step 6b: each block's lifts from its foundation, the layers per lift,
     /// foundations on zone boundaries, named lift groups.
-    fn lifts(&self, layers: &Layers, lift_height: f64, zone_lifts: u32) -> Result<Lifts, DamMeshError> {
+    fn lifts(
+        &self,
+        layers: &Layers,
+        lift_height: f64,
+        zone_lifts: u32,
+    ) -> Result<Lifts, DamMeshError> {
         let mut per_lift = 0u32;
         let mut blocks = Vec::with_capacity(self.n_blocks as usize);
         for b in 1..=self.n_blocks {
@@ -1050,7 +1089,7 @@ impl<'a> Dam<'a> {
         }
         let band = zone_lifts as usize * per_lift as usize;
         for (b, &(base, _)) in blocks.iter().enumerate() {
-            if base as usize % band != 0 {
+            if !(base as usize).is_multiple_of(band) {
                 let below = base as usize / band * band;
                 let above = (below + band).min(layers.z.len() - 1);
                 return Err(block_err(
@@ -1103,7 +1142,11 @@ impl<'a> Dam<'a> {
         let (zb, zt) = (layers.z[base], layers.z[top]);
         let ratio = (zt - zb) / lift;
         if ratio > 1e6 {
-            return Err(block_err(self.raw, b, format!("is more than a million lifts of {lift} m high")));
+            return Err(block_err(
+                self.raw,
+                b,
+                format!("is more than a million lifts of {lift} m high"),
+            ));
         }
         let n = (ratio.round() as usize).max(1);
         let mut bounds = vec![base as u32];
@@ -1141,7 +1184,11 @@ impl<'a> Dam<'a> {
                 let e = e as usize;
                 if e >= self.part.len() || self.part[e] != b {
                     let p = self.part.get(e).copied().unwrap_or(0);
-                    return Err(elem_err(self.raw, e, format!("is in {name} but in {}", part_name(p))));
+                    return Err(elem_err(
+                        self.raw,
+                        e,
+                        format!("is in {name} but in {}", part_name(p)),
+                    ));
                 }
                 named[e] = true;
                 if lifts.lift_of[e] != m {
@@ -1159,7 +1206,9 @@ impl<'a> Dam<'a> {
                 }
             }
         }
-        if let Some(e) = (0..self.part.len()).find(|&e| naming_blocks.contains(&self.part[e]) && !named[e]) {
+        if let Some(e) =
+            (0..self.part.len()).find(|&e| naming_blocks.contains(&self.part[e]) && !named[e])
+        {
             return Err(elem_err(
                 self.raw,
                 e,
@@ -1191,10 +1240,10 @@ impl<'a> Dam<'a> {
         let mut id = vec![[NONE; 2]; self.class_node.len()];
         let mut dof = vec![NONE; self.class_node.len()];
         let (mut nodes, mut thermal_dof, mut n_dofs) = (Vec::new(), Vec::new(), 0u32);
-        for n in 0..nn {
-            for copy in 0..2 {
-                let c = self.class[n] as usize;
-                if served[n] >> copy & 1 == 0 || id[c][copy] != NONE {
+        for (n, &serves) in served.iter().enumerate() {
+            let c = self.class[n] as usize;
+            for copy in [0, 1] {
+                if serves >> copy & 1 == 0 || id[c][copy] != NONE {
                     continue;
                 }
                 id[c][copy] = nodes.len() as u32;
@@ -1227,7 +1276,13 @@ impl<'a> Dam<'a> {
 
     /// Face pairs sorted by (joint, layer, position upstream → downstream
     /// along the mean s direction of that joint's layer).
-    fn face_pairs(&self, adj: &Adj, layers: &Layers, num: &Numbered, per_zone: u32) -> Vec<FacePair> {
+    fn face_pairs(
+        &self,
+        adj: &Adj,
+        layers: &Layers,
+        num: &Numbered,
+        per_zone: u32,
+    ) -> Vec<FacePair> {
         let mut found: Vec<(u32, u32, u32, u32)> = Vec::new();
         for (e, faces) in adj.iter().enumerate() {
             let (e2, _) = faces[3];
@@ -1235,7 +1290,8 @@ impl<'a> Dam<'a> {
                 found.push((self.part[e], layers.of[e], e as u32, e2));
             }
         }
-        let corners = |e: u32| [1, 2, 6, 5].map(|c| num.nodes[num.elements[e as usize][c] as usize]);
+        let corners =
+            |e: u32| [1, 2, 6, 5].map(|c| num.nodes[num.elements[e as usize][c] as usize]);
         let mut across: HashMap<(u32, u32), [f64; 3]> = HashMap::new();
         for &(j, l, ea, _) in &found {
             let q = corners(ea);
@@ -1267,7 +1323,12 @@ impl<'a> Dam<'a> {
 
     /// Zones: runs of pairs of one (joint, zone), each a whole band with the
     /// same number of faces across in every layer.
-    fn zones(&self, pairs: &[FacePair], z: &[f64], per_zone: u32) -> Result<Vec<Zone>, DamMeshError> {
+    fn zones(
+        &self,
+        pairs: &[FacePair],
+        z: &[f64],
+        per_zone: u32,
+    ) -> Result<Vec<Zone>, DamMeshError> {
         let n_layers = z.len() as u32 - 1;
         let mut zones: Vec<Zone> = Vec::new();
         for (p, fp) in pairs.iter().enumerate() {
@@ -1290,7 +1351,12 @@ impl<'a> Dam<'a> {
             let first = (zn.zone - 1) * per_zone;
             let end = (zn.zone * per_zone).min(n_layers);
             let counts: Vec<usize> = (first..end)
-                .map(|l| zn.pairs.iter().filter(|&&p| pairs[p as usize].layer == l).count())
+                .map(|l| {
+                    zn.pairs
+                        .iter()
+                        .filter(|&&p| pairs[p as usize].layer == l)
+                        .count()
+                })
                 .collect();
             if counts.iter().any(|&c| c == 0 || c != counts[0]) {
                 return Err(dam_err(
@@ -1347,7 +1413,11 @@ impl<'a> Dam<'a> {
                     }
                 };
                 let classes = self.face_classes(eu, fu);
-                for (g, k) in overrides.iter().zip([SurfaceKind::Far, SurfaceKind::Wet, SurfaceKind::Ground]) {
+                for (g, k) in
+                    overrides
+                        .iter()
+                        .zip([SurfaceKind::Far, SurfaceKind::Wet, SurfaceKind::Ground])
+                {
                     if let Some(set) = g {
                         if classes.iter().all(|&c| set[c as usize]) {
                             kind = k;
@@ -1355,7 +1425,11 @@ impl<'a> Dam<'a> {
                         }
                     }
                 }
-                SurfaceFace { elem: e, face: f, kind }
+                SurfaceFace {
+                    elem: e,
+                    face: f,
+                    kind,
+                }
             })
             .collect()
     }
@@ -1376,14 +1450,22 @@ impl<'a> Dam<'a> {
 /// Zone points as the generators place them: at the zone's mid height, on
 /// the first, middle (the upstream one of the two middle ones, at its
 /// downstream edge, when the count is even) and last pair across.
-fn zone_points(zones: &[Zone], pairs: &[FacePair], z: &[f64], per_zone: u32, nodes: &[[f64; 3]]) -> Vec<ZoneSite> {
+fn zone_points(
+    zones: &[Zone],
+    pairs: &[FacePair],
+    z: &[f64],
+    per_zone: u32,
+    nodes: &[[f64; 3]],
+) -> Vec<ZoneSite> {
     let mut out = Vec::with_capacity(3 * zones.len());
     for zn in zones {
         let first = ((zn.zone - 1) * per_zone) as usize;
         let end = ((zn.zone * per_zone) as usize).min(z.len() - 1);
         let zm = 0.5 * (zn.z_bottom + zn.z_top);
         let scale = 1e-12 * (1.0 + zm.abs());
-        let layer = (first..end).find(|&l| z[l + 1] >= zm - scale).unwrap_or(end - 1);
+        let layer = (first..end)
+            .find(|&l| z[l + 1] >= zm - scale)
+            .unwrap_or(end - 1);
         let t = (2.0 * (zm - z[layer]) / (z[layer + 1] - z[layer]) - 1.0).clamp(-1.0, 1.0);
         let row: Vec<u32> = zn
             .pairs
@@ -1392,7 +1474,11 @@ fn zone_points(zones: &[Zone], pairs: &[FacePair], z: &[f64], per_zone: u32, nod
             .filter(|&p| pairs[p as usize].layer == layer as u32)
             .collect();
         let n = row.len();
-        let center = if n % 2 == 1 { (n / 2, 0.0) } else { (n / 2 - 1, 1.0) };
+        let center = if n % 2 == 1 {
+            (n / 2, 0.0)
+        } else {
+            (n / 2 - 1, 1.0)
+        };
         for (point, (k, s)) in [
             (ZonePoint::Upstream, (0, -1.0)),
             (ZonePoint::Center, center),
@@ -1494,14 +1580,21 @@ impl Nearest {
                 .or_default()
                 .push(i as u32);
         }
-        Nearest { h, cells, max_ring: 66 }
+        Nearest {
+            h,
+            cells,
+            max_ring: 66,
+        }
     }
 
     fn find(&self, points: &[([f64; 3], [f64; 3])], q: [f64; 3]) -> Option<usize> {
         if points.is_empty() {
             return None;
         }
-        let k = [(q[0] / self.h).floor() as i64, (q[1] / self.h).floor() as i64];
+        let k = [
+            (q[0] / self.h).floor() as i64,
+            (q[1] / self.h).floor() as i64,
+        ];
         let mut best: Option<(f64, usize)> = None;
         // A query far from the set starts at the ring of its nearest cell.
         let start = self.ring_offset(k);
@@ -1515,7 +1608,11 @@ impl Nearest {
                     if i.abs() != r && j.abs() != r {
                         continue;
                     }
-                    for &p in self.cells.get(&[k[0] + i, k[1] + j]).map_or(&[][..], |v| v.as_slice()) {
+                    for &p in self
+                        .cells
+                        .get(&[k[0] + i, k[1] + j])
+                        .map_or(&[][..], |v| v.as_slice())
+                    {
                         let d = norm(sub(points[p as usize].0, q));
                         if best.is_none_or(|b| d < b.0 || (d == b.0 && (p as usize) < b.1)) {
                             best = Some((d, p as usize));
@@ -1525,7 +1622,8 @@ impl Nearest {
             }
         }
         best.map(|b| b.1).or_else(|| {
-            (0..points.len()).min_by(|&a, &b| norm(sub(points[a].0, q)).total_cmp(&norm(sub(points[b].0, q))))
+            (0..points.len())
+                .min_by(|&a, &b| norm(sub(points[a].0, q)).total_cmp(&norm(sub(points[b].0, q))))
         })
     }
 
