@@ -324,6 +324,20 @@ fn node_groups_override_surface_kinds() {
     }
 }
 
+/// A scene may name a mesh file instead of a generator.
+#[test]
+fn a_mesh_scene_validates() {
+    let s = crate::common::scene("", "kind = \"mesh\"\nfile = \"dam.msh\"", "");
+    match &s.geometry {
+        groutready::mesh::geometry::Geometry::Mesh(g) => assert_eq!(g.file, "dam.msh"),
+        other => panic!("mesh geometry expected, got {other:?}"),
+    }
+    let text = "kind = \"mesh\"\nfile = \"dam.msh\"\nn_blocks = 3";
+    let err = std::panic::catch_unwind(|| crate::common::scene("", text, "")).unwrap_err();
+    let msg = err.downcast_ref::<String>().cloned().unwrap_or_default();
+    assert!(msg.contains("n_blocks"), "{msg}");
+}
+
 // ---- malformed meshes ----
 
 /// The two blocks of models/two_blocks.toml (no rock, 4 × 2 elements per layer, 6 layers).

@@ -592,13 +592,20 @@ fn check_jacobian(raw: &RawMesh, e: usize, part: u32, h: &[u32; 8]) -> Result<()
 struct Hash3 {
     h: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Boxes over more than [`Hash3::MAX_CELLS`] cells, tried for every point.
+    big: Vec<u32>,
 }
 
 impl Hash3 {
+    /// A box covering more cells than this goes to `big` (a file's few huge
+    /// faces must not fill the memory).
+    const MAX_CELLS: i128 = 512;
+
     fn new(h: f64) -> Hash3 {
         Hash3 {
             h,
             cells: HashMap::new(),
+            big: Vec::new(),
         }
     }
     fn key(&self, p: [f64; 3]) -> [i64; 3] {
@@ -607,6 +614,11 @@ impl Hash3 {
     /// Put `id` in every cell the box [lo, hi] touches.
     fn insert_box(&mut self, lo: [f64; 3], hi: [f64; 3], id: u32) {
         let (a, b) = (self.key(lo), self.key(hi));
+        let count: i128 = (0..3).map(|k| b[k] as i128 - a[k] as i128 + 1).product();
+        if count > Self::MAX_CELLS {
+            self.big.push(id);
+            return;
+        }
         for i in a[0]..=b[0] {
             for j in a[1]..=b[1] {
                 for k in a[2]..=b[2] {
@@ -615,8 +627,13 @@ impl Hash3 {
             }
         }
     }
-    fn at(&self, p: [f64; 3]) -> &[u32] {
-        self.cells.get(&self.key(p)).map_or(&[], |v| v.as_slice())
+    /// The boxes that may hold `p`.
+    fn near(&self, p: [f64; 3]) -> impl Iterator<Item = u32> + '_ {
+        let cell = self
+            .cells
+            .get(&self.key(p))
+            .map_or(&[][..], |v| v.as_slice());
+        cell.iter().chain(&self.big).copied()
     }
 }
 
@@ -731,7 +748,12 @@ impl<'a> Dam<'a> {
             for di in -1..=1 {
                 for dj in -1..=1 {
                     for dk in -1..=1 {
-                        let Some(list) = grid.cells.get(&[k[0] + di, k[1] + dj, k[2] + dk]) else {
+                        let key = [
+                            k[0].wrapping_add(di),
+                            k[1].wrapping_add(dj),
+                            k[2].wrapping_add(dk),
+                        ];
+                        let Some(list) = grid.cells.get(&key) else {
                             continue;
                         };
                         for &m in list {
@@ -902,7 +924,7 @@ impl<'a> Dam<'a> {
             let (e, _) = bound[i];
             let c = mean(q);
             let tol_n = 1e-4 * diam(q) + self.tol;
-            for &j in grid.at(c) {
+            for j in grid.near(c) {
                 let (e2, _) = bound[j as usize];
                 let (p, p2) = (self.part[e], self.part[e2]);
                 if p == p2 || (p == 0 && p2 == 0) || !on_quad(c, &quads[j as usize], tol_n) {
@@ -1588,53 +1610,48 @@ impl Nearest {
     }
 
     fn find(&self, points: &[([f64; 3], [f64; 3])], q: [f64; 3]) -> Option<usize> {
-        if points.is_empty() {
-            return None;
-        }
         let k = [
             (q[0] / self.h).floor() as i64,
             (q[1] / self.h).floor() as i64,
         ];
-        let mut best: Option<(f64, usize)> = None;
-        // A query far from the set starts at the ring of its nearest cell.
         let start = self.ring_offset(k);
+        // Far outside the set (which spans 64 cells) rings cost more than the set.
+        if start > 16 {
+            return (0..points.len())
+                .min_by(|&a, &b| norm(sub(points[a].0, q)).total_cmp(&norm(sub(points[b].0, q))));
+        }
+        let mut best: Option<(f64, usize)> = None;
         for r in start..=start + self.max_ring {
             // Every point of ring r is at least (r − 1)·h away in plan.
             if best.is_some_and(|b| b.0 <= (r - 1).max(0) as f64 * self.h) {
                 break;
             }
-            for i in -r..=r {
-                for j in -r..=r {
-                    if i.abs() != r && j.abs() != r {
-                        continue;
-                    }
-                    for &p in self
-                        .cells
-                        .get(&[k[0] + i, k[1] + j])
-                        .map_or(&[][..], |v| v.as_slice())
-                    {
-                        let d = norm(sub(points[p as usize].0, q));
-                        if best.is_none_or(|b| d < b.0 || (d == b.0 && (p as usize) < b.1)) {
-                            best = Some((d, p as usize));
-                        }
+            let perimeter = (-r..=r)
+                .flat_map(|i| [[i, -r], [i, r]])
+                .chain((1 - r..r).flat_map(|j| [[-r, j], [r, j]]));
+            for [i, j] in perimeter {
+                let key = [k[0].wrapping_add(i), k[1].wrapping_add(j)];
+                for &p in self.cells.get(&key).map_or(&[][..], |v| v.as_slice()) {
+                    let d = norm(sub(points[p as usize].0, q));
+                    if best.is_none_or(|b| d < b.0 || (d == b.0 && (p as usize) < b.1)) {
+                        best = Some((d, p as usize));
                     }
                 }
             }
         }
-        best.map(|b| b.1).or_else(|| {
-            (0..points.len())
-                .min_by(|&a, &b| norm(sub(points[a].0, q)).total_cmp(&norm(sub(points[b].0, q))))
-        })
+        best.map(|b| b.1)
     }
 
     /// Rings between a query cell and the set's cells (0 for a query inside).
     fn ring_offset(&self, k: [i64; 2]) -> i64 {
         self.cells
             .keys()
-            .map(|c| (c[0] - k[0]).abs().max((c[1] - k[1]).abs()))
+            .map(|c| {
+                let d = |a: i64, b: i64| a.saturating_sub(b).saturating_abs();
+                d(c[0], k[0]).max(d(c[1], k[1]))
+            })
             .min()
             .unwrap_or(0)
-            .min(1 << 20)
     }
 }
 
