@@ -508,6 +508,19 @@ fn a_gap_in_block_numbers_is_named() {
 }
 
 #[test]
+fn blocks_numbered_from_the_right_bank_are_refused() {
+    let mut raw = two_blocks();
+    let b1 = raw.element_groups.remove("block_1").unwrap();
+    let b2 = raw.element_groups.insert("block_2".into(), b1).unwrap();
+    raw.element_groups.insert("block_1".into(), b2);
+    assert_eq!(
+        error(&raw),
+        "two.msh: the blocks run from the right bank to the left: number them block_1, block_2, … from the left \
+         bank (on the left looking downstream, along +y; z up)"
+    );
+}
+
+#[test]
 fn blocks_1_and_3_touching_are_named() {
     let mut raw = RawMesh::from_mesh(&block(3, 2, 6, 3.0), "three.msh");
     let b2 = raw.element_groups.remove("block_2").unwrap();
@@ -549,18 +562,23 @@ fn a_foundation_off_a_zone_boundary_is_named() {
     );
 }
 
-/// The demo's build time (`cargo test --release --test it -- --ignored build_time`).
+/// Build times of the demo and the Xiaowan-like arch, from shuffled,
+/// re-oriented, joint-merged files
+/// (`cargo test --release --test it -- --ignored build_time --nocapture`).
 #[test]
 #[ignore]
 fn build_time_of_the_demo() {
-    let (m, lift, zone) = generated("demo_arch.toml");
-    let raw = as_a_file_says(&m, 5);
-    let t = std::time::Instant::now();
-    let got = dam::build(&raw, lift, zone).unwrap();
-    println!(
-        "demo arch: {} elements, {} nodes: built in {:.3} s",
-        got.elements.len(),
-        got.nodes.len(),
-        t.elapsed().as_secs_f64()
-    );
+    for scene in ["demo_arch.toml", "xiaowan_like.toml"] {
+        let (m, lift, zone) = generated(scene);
+        let raw = as_a_file_says(&m, 5);
+        let t = std::time::Instant::now();
+        let got = dam::build(&raw, lift, zone).unwrap();
+        println!(
+            "{scene}: {} elements, {} nodes: built in {:.3} s",
+            got.elements.len(),
+            got.nodes.len(),
+            t.elapsed().as_secs_f64()
+        );
+        assert_eq!(face_pair_set(&got), face_pair_set(&m));
+    }
 }

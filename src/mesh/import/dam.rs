@@ -124,6 +124,7 @@ pub fn build(raw: &RawMesh, lift_height: f64, zone_height: f64) -> Result<Mesh, 
     let part = parts(raw)?;
     let n_blocks = part.iter().copied().max().unwrap_or(0);
     let corners = orient(raw, &part, n_blocks)?;
+    check_downstream(raw, &part, &corners)?;
     let dam = Dam::new(raw, part, n_blocks, corners);
     let roles = dam.roles()?;
     let adj = dam.faces()?;
@@ -547,6 +548,29 @@ fn orient(raw: &RawMesh, part: &[u32], n_blocks: u32) -> Result<Vec<[u32; 8]>, D
         out.push(oriented);
     }
     Ok(out)
+}
+
+/// After orientation η = ζ × ξ points downstream only if the blocks run
+/// from the left bank with y downstream: the concrete's mean η must have
+/// y > 0, else the numbering or the axes are the other way round.
+fn check_downstream(raw: &RawMesh, part: &[u32], corners: &[[u32; 8]]) -> Result<(), DamMeshError> {
+    let mut sum = 0.0;
+    for (h, _) in corners.iter().zip(part).filter(|(_, &p)| p > 0) {
+        let x = coords(raw, h);
+        // η runs from face 2 (corners 0, 1, 5, 4) to face 4 (2, 3, 7, 6).
+        let up = mean(&[x[0], x[1], x[5], x[4]]);
+        let down = mean(&[x[2], x[3], x[7], x[6]]);
+        sum += unit(sub(down, up))[1];
+    }
+    if sum <= 0.0 {
+        return Err(groups_err(
+            raw,
+            "the blocks run from the right bank to the left: number them block_1, block_2, … from the left bank \
+             (on the left looking downstream, along +y; z up)"
+                .to_string(),
+        ));
+    }
+    Ok(())
 }
 
 /// The smallest corner Jacobian must be clearly positive (relative to the
