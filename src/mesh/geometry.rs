@@ -10,6 +10,16 @@ use super::MeshError;
 pub enum Geometry {
     Blocks(BlocksGeometry),
     Arch(ArchGeometry),
+    Mesh(MeshGeometry),
+}
+
+/// An analyst's mesh file (Gmsh MSH 4.1 or Abaqus/CalculiX `.inp`) with
+/// element groups `block_<n>` and `rock` (see [`super::import`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshGeometry {
+    /// The mesh file, relative to the scene file's folder.
+    pub file: String,
 }
 
 /// N rectangular blocks in a row along x on a rock foundation.

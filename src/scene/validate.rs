@@ -26,6 +26,15 @@ pub(super) fn validate(s: &Scene) -> Check {
     match &s.geometry {
         Geometry::Blocks(g) => blocks(g, s)?,
         Geometry::Arch(g) => arch(g, s)?,
+        // The file's blocks, rock and layers are checked when it is read (mesh::import::dam).
+        Geometry::Mesh(g) => {
+            if g.file.trim().is_empty() {
+                return Err(SceneError::invalid(
+                    "geometry.file",
+                    "geometry.file must name a mesh file".to_string(),
+                ));
+            }
+        }
     }
     time(&s.time, s)?;
     if let Err(Invalid { key, message }) = s.solver.validate() {

@@ -24,6 +24,7 @@ mod material_creep;
 mod material_laws;
 mod mechanics_staged;
 mod mesh_generators;
+mod mesh_import;
 mod out_safety;
 mod planner_limits;
 mod planner_supercool;
