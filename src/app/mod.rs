@@ -72,6 +72,7 @@ pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
     let mesh = match &scene.geometry {
         Geometry::Blocks(g) => mesh::generate_blocks(g, lift, zone),
         Geometry::Arch(g) => mesh::generate_arch(g, lift, zone),
+        Geometry::ArchTable(g) => mesh::generate_arch_table(g, lift, zone),
     };
     mesh.map_err(|source| AppError::Mesh {
         scene: origin.to_string(),

@@ -10,6 +10,8 @@ use super::MeshError;
 pub enum Geometry {
     Blocks(BlocksGeometry),
     Arch(ArchGeometry),
+    /// An arch dam by design tables (CSV files beside the scene).
+    ArchTable(super::arch_table::ArchTableGeometry),
 }
 
 /// N rectangular blocks in a row along x on a rock foundation.

@@ -90,6 +90,7 @@ use chrono::NaiveDate;
 use crate::vocab::{ZoneId, ZonePoint};
 
 pub(crate) use check::lifts_label;
+pub(crate) use read::line_at;
 pub use check::{
     check_dates, check_reservoir, validate, warnings, MAX_LEVEL_ABOVE_CREST, MAX_SCHEDULE_YEARS,
 };
