@@ -139,7 +139,10 @@ impl HalfCurve {
                 let e = (k * phi).exp();
                 let (s, c) = phi.sin_cos();
                 let d = 1.0 + k * k;
-                [r * (e * (k * c + s) - k) / d, r * (e * (k * s - c) + 1.0) / d]
+                [
+                    r * (e * (k * c + s) - k) / d,
+                    r * (e * (k * s - c) + 1.0) / d,
+                ]
             }
         }
     }
@@ -165,7 +168,10 @@ impl HalfCurve {
             ArchType::Elliptical => {
                 let (a, b) = self.semi_axes();
                 let t = self.ellipse_t(phi);
-                simpson(|u| (a * a * u.cos().powi(2) + b * b * u.sin().powi(2)).sqrt(), t)
+                simpson(
+                    |u| (a * a * u.cos().powi(2) + b * b * u.sin().powi(2)).sqrt(),
+                    t,
+                )
             }
             ArchType::LogSpiral => {
                 let k = h.spiral_growth;
@@ -181,7 +187,7 @@ impl HalfCurve {
     /// The tangent angle at arc length `s` from the crown; `None` when the
     /// half-curve is shorter than `s` up to [`MAX_ANGLE`].
     pub fn angle_at_length(&self, s: f64) -> Option<f64> {
-        if !(s >= 0.0) || self.arc_length(MAX_ANGLE) < s {
+        if s.is_nan() || s < 0.0 || self.arc_length(MAX_ANGLE) < s {
             return None;
         }
         if let ArchType::Circular = self.kind {

@@ -187,7 +187,10 @@ impl ArchRow {
             elevation_m: l(self.elevation_m, o.elevation_m),
             crown_upstream_y_m: l(self.crown_upstream_y_m, o.crown_upstream_y_m),
             crown_downstream_y_m: l(self.crown_downstream_y_m, o.crown_downstream_y_m),
-            thickness_left_abutment_m: l(self.thickness_left_abutment_m, o.thickness_left_abutment_m),
+            thickness_left_abutment_m: l(
+                self.thickness_left_abutment_m,
+                o.thickness_left_abutment_m,
+            ),
             thickness_right_abutment_m: l(
                 self.thickness_right_abutment_m,
                 o.thickness_right_abutment_m,
@@ -489,7 +492,8 @@ fn level(
     let r = tables.row_at(zc);
     let t_crown = r.crown_downstream_y_m - r.crown_upstream_y_m;
     for half in [&r.left, &r.right] {
-        if !(0.5 * t_crown < half.radius_m) {
+        // also refuses NaN
+        if 0.5 * t_crown >= half.radius_m || t_crown.is_nan() {
             return Err(MeshError::param(
                 "table",
                 format!(

@@ -34,7 +34,9 @@ pub enum ArchTableError {
         detail: String,
     },
     /// A data row has the wrong number of fields.
-    #[error("{file}:{line}: expected {expected} fields (as the header), found {found} in {text:?}")]
+    #[error(
+        "{file}:{line}: expected {expected} fields (as the header), found {found} in {text:?}"
+    )]
     FieldCount {
         file: String,
         line: usize,
@@ -141,15 +143,16 @@ fn records(text: &str, file: &str) -> Result<Records, ArchTableError> {
             Ok(false) => break,
             Ok(true) => {}
             Err(e) => {
-                let line = e
-                    .position()
-                    .map_or(1, |p| crate::schedule::line_at(text, p.byte() as usize));
-                return Err(row_err(file, line, 1, format!("expected a CSV record ({e})")));
+                let line = e.position().map_or(1, |p| record_line(text, p.byte()));
+                return Err(row_err(
+                    file,
+                    line,
+                    1,
+                    format!("expected a CSV record ({e})"),
+                ));
             }
         }
-        let line = record
-            .position()
-            .map_or(1, |p| crate::schedule::line_at(text, p.byte() as usize));
+        let line = record.position().map_or(1, |p| record_line(text, p.byte()));
         let fields: Vec<String> = record
             .iter()
             .map(|f| f.trim_start_matches('\u{feff}').trim().to_string())
@@ -165,6 +168,20 @@ fn records(text: &str, file: &str) -> Result<Records, ArchTableError> {
         }
     }
     Ok(out)
+}
+
+/// 1-based line of the record the csv reader says starts at byte `offset`:
+/// its position may be that of the blank or comment lines it skipped first.
+fn record_line(text: &str, offset: u64) -> usize {
+    let mut line = crate::schedule::line_at(text, offset as usize);
+    let mut lines = text.lines().skip(line - 1);
+    while lines
+        .next()
+        .is_some_and(|l| l.trim().is_empty() || l.starts_with('#'))
+    {
+        line += 1;
+    }
+    line
 }
 
 fn row_err(file: &str, line: usize, column: usize, message: impl Into<String>) -> ArchTableError {
@@ -220,7 +237,12 @@ struct Line<'a> {
 
 impl Line<'_> {
     /// The number in column `name`, which must satisfy `ok` (else `expected`).
-    fn num(&self, name: &str, expected: &str, ok: impl Fn(f64) -> bool) -> Result<f64, ArchTableError> {
+    fn num(
+        &self,
+        name: &str,
+        expected: &str,
+        ok: impl Fn(f64) -> bool,
+    ) -> Result<f64, ArchTableError> {
         let c = self.map[name];
         let text = &self.fields[c];
         match text.parse::<f64>() {
@@ -234,7 +256,11 @@ impl Line<'_> {
             file: self.file.to_string(),
             line: self.line,
             column: c + 1,
-            name: self.map.iter().find(|(_, &i)| i == c).map_or(String::new(), |(n, _)| n.clone()),
+            name: self
+                .map
+                .iter()
+                .find(|(_, &i)| i == c)
+                .map_or(String::new(), |(n, _)| n.clone()),
             expected: expected.to_string(),
             found: ScheduleError::excerpt(found),
         }
@@ -242,7 +268,11 @@ impl Line<'_> {
 }
 
 /// The arch table's rows, checked (module doc of [`super::arch_table`]).
-fn parse_arch(text: &str, file: &str, g: &ArchTableGeometry) -> Result<Vec<ArchRow>, ArchTableError> {
+fn parse_arch(
+    text: &str,
+    file: &str,
+    g: &ArchTableGeometry,
+) -> Result<Vec<ArchRow>, ArchTableError> {
     let r = records(text, file)?;
     let kind = g.arch_type;
     let mut needed: Vec<&str> = BASE_COLUMNS.to_vec();
@@ -270,7 +300,10 @@ fn parse_arch(text: &str, file: &str, g: &ArchTableGeometry) -> Result<Vec<ArchR
         // another type's coefficients must be blank: a filled one is a mistake of type
         for (name, &c) in &map {
             if !needed.contains(&name.as_str()) && !fields[c].is_empty() {
-                let e = format!("blank (a coefficient of another arch type; the scene's arch_type is {})", kind.name());
+                let e = format!(
+                    "blank (a coefficient of another arch type; the scene's arch_type is {})",
+                    kind.name()
+                );
                 return Err(l.cell_err(c, &e, &fields[c]));
             }
         }
@@ -305,8 +338,16 @@ fn arch_row(l: &Line, kind: ArchType) -> Result<ArchRow, ArchTableError> {
         &format!("expected a y [m] downstream of the upstream face's {yu} m (the crown thickness y_d − y_u must be > 0)"),
         |v| v > yu,
     )?;
-    let tl = l.num("thickness_left_abutment_m", "expected a thickness > 0 m", pos)?;
-    let tr = l.num("thickness_right_abutment_m", "expected a thickness > 0 m", pos)?;
+    let tl = l.num(
+        "thickness_left_abutment_m",
+        "expected a thickness > 0 m",
+        pos,
+    )?;
+    let tr = l.num(
+        "thickness_right_abutment_m",
+        "expected a thickness > 0 m",
+        pos,
+    )?;
     let half = |side: &str| -> Result<HalfArch, ArchTableError> {
         let mut h = HalfArch {
             radius_m: l.num(&format!("radius_{side}_m"), "expected a radius > 0 m", pos)?,
@@ -314,7 +355,11 @@ fn arch_row(l: &Line, kind: ArchType) -> Result<ArchRow, ArchTableError> {
         };
         match kind {
             ArchType::ThreeCentred => {
-                h.outer_radius_m = l.num(&format!("outer_radius_{side}_m"), "expected a radius > 0 m", pos)?;
+                h.outer_radius_m = l.num(
+                    &format!("outer_radius_{side}_m"),
+                    "expected a radius > 0 m",
+                    pos,
+                )?;
                 let max = MAX_ANGLE.to_degrees();
                 h.central_half_angle = l
                     .num(
@@ -325,10 +370,18 @@ fn arch_row(l: &Line, kind: ArchType) -> Result<ArchRow, ArchTableError> {
                     .to_radians();
             }
             ArchType::Elliptical => {
-                h.axis_ratio = l.num(&format!("axis_ratio_{side}"), "expected a semi-axis ratio > 0", pos)?;
+                h.axis_ratio = l.num(
+                    &format!("axis_ratio_{side}"),
+                    "expected a semi-axis ratio > 0",
+                    pos,
+                )?;
             }
             ArchType::LogSpiral => {
-                h.spiral_growth = l.num(&format!("spiral_growth_{side}"), "expected a growth rate k (a number)", any)?;
+                h.spiral_growth = l.num(
+                    &format!("spiral_growth_{side}"),
+                    "expected a growth rate k (a number)",
+                    any,
+                )?;
             }
             ArchType::Circular | ArchType::Parabolic => {}
         }
@@ -356,7 +409,12 @@ fn covers(
     let (base, crest) = (g.base_elevation_m, g.crest_elevation_m);
     let tol = 1e-9 * (1.0 + (crest - base).abs());
     let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
-        return Err(row_err(file, header_line, 1, "no rows: the table must cover base_elevation_m..crest_elevation_m"));
+        return Err(row_err(
+            file,
+            header_line,
+            1,
+            "no rows: the table must cover base_elevation_m..crest_elevation_m",
+        ));
     };
     if first.1.elevation_m > base + tol {
         return Err(row_err(
@@ -385,7 +443,11 @@ fn covers(
 
 /// The valley profile, checked: increasing distances covering the crest,
 /// elevations within the dam.
-fn parse_valley(text: &str, file: &str, g: &ArchTableGeometry) -> Result<Vec<[f64; 2]>, ArchTableError> {
+fn parse_valley(
+    text: &str,
+    file: &str,
+    g: &ArchTableGeometry,
+) -> Result<Vec<[f64; 2]>, ArchTableError> {
     let r = records(text, file)?;
     let map = header_map(&r, file, &VALLEY_COLUMNS, &VALLEY_COLUMNS)?;
     let (base, crest, length) = (g.base_elevation_m, g.crest_elevation_m, g.crest_length_m);
@@ -425,14 +487,22 @@ fn parse_valley(text: &str, file: &str, g: &ArchTableGeometry) -> Result<Vec<[f6
     }
     let col = map["crest_distance_m"] + 1;
     let (Some(first), Some(last)) = (out.first(), out.last()) else {
-        return Err(row_err(file, r.header_line, 1, "no rows: the valley must cover the crest, 0 to crest_length_m"));
+        return Err(row_err(
+            file,
+            r.header_line,
+            1,
+            "no rows: the valley must cover the crest, 0 to crest_length_m",
+        ));
     };
     if first.1[0] > tol {
         return Err(row_err(
             file,
             first.0,
             col,
-            format!("the valley starts at {} m along the crest: it must start at the left end, 0 m", first.1[0]),
+            format!(
+                "the valley starts at {} m along the crest: it must start at the left end, 0 m",
+                first.1[0]
+            ),
         ));
     }
     if last.1[0] < length - tol {

@@ -61,8 +61,8 @@ pub mod arch_table;
 mod arch_table_read;
 pub mod blocks;
 pub mod geometry;
-pub mod import;
 mod grid;
+pub mod import;
 pub mod vtu;
 
 use std::collections::{BTreeMap, HashMap};

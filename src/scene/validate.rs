@@ -502,7 +502,10 @@ fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
     if g.n_blocks < 2 {
         return Err(SceneError::invalid(
             "geometry.n_blocks",
-            format!("geometry.n_blocks must be >= 2 for an arch, got {}", g.n_blocks),
+            format!(
+                "geometry.n_blocks must be >= 2 for an arch, got {}",
+                g.n_blocks
+            ),
         ));
     }
     finite("geometry.base_elevation_m", g.base_elevation_m)?;
@@ -537,7 +540,9 @@ fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
     if !g.block_widths_m.is_empty() {
         let sum: f64 = g.block_widths_m.iter().sum();
         if g.block_widths_m.len() != g.n_blocks as usize
-            || g.block_widths_m.iter().any(|w| !(w.is_finite() && *w > 0.0))
+            || g.block_widths_m
+                .iter()
+                .any(|w| !(w.is_finite() && *w > 0.0))
             || (sum - g.crest_length_m).abs() > 1e-6 * g.crest_length_m
         {
             return Err(SceneError::invalid(

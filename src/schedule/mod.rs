@@ -90,12 +90,12 @@ use chrono::NaiveDate;
 use crate::vocab::{ZoneId, ZonePoint};
 
 pub(crate) use check::lifts_label;
-pub(crate) use read::line_at;
 pub use check::{
     check_dates, check_reservoir, validate, warnings, MAX_LEVEL_ABOVE_CREST, MAX_SCHEDULE_YEARS,
 };
 pub use error::ScheduleError;
 pub use layout::{check_against, DamLayout, ZoneExtent};
+pub(crate) use read::line_at;
 pub use synth::{synthesize, SynthParams};
 pub use warning::Warning;
 pub use write::write_dir;

@@ -12,7 +12,8 @@ use groutready::mesh::geometry::{ArchGeometry, Geometry};
 use groutready::mesh::{generate_arch, Mesh};
 use groutready::scene::Scene;
 
-const HEADER: &str = "elevation_m,crown_upstream_y_m,crown_downstream_y_m,thickness_left_abutment_m,\
+const HEADER: &str =
+    "elevation_m,crown_upstream_y_m,crown_downstream_y_m,thickness_left_abutment_m,\
 thickness_right_abutment_m,radius_left_m,radius_right_m";
 
 fn demo_scene_text() -> String {
@@ -74,7 +75,10 @@ fn sampled_tables(p: &ArchGeometry, lift: f64) -> (String, String, String) {
         let shape = (1.0 - f.abs().powf(p.valley_exponent)) / (1.0 - f_min.powf(p.valley_exponent));
         crest - p.height_m * shape.max(p.min_block_height_fraction).min(1.0)
     };
-    let mut valley = format!("crest_distance_m,foundation_elevation_m\n0.0,{:?}\n", found(fs[0]));
+    let mut valley = format!(
+        "crest_distance_m,foundation_elevation_m\n0.0,{:?}\n",
+        found(fs[0])
+    );
     for &f in &fs {
         valley += &format!("{:?},{:?}\n", 0.5 * (f + 1.0) * length, found(f));
     }
@@ -138,7 +142,10 @@ fn same_mesh(got: &Mesh, want: &Mesh) {
     assert_eq!(got.surfaces, want.surfaces);
     assert_eq!(got.zone_points.len(), want.zone_points.len());
     for (a, b) in got.zone_points.iter().zip(&want.zone_points) {
-        assert_eq!((a.joint, a.zone, a.point, a.pair), (b.joint, b.zone, b.point, b.pair));
+        assert_eq!(
+            (a.joint, a.zone, a.point, a.pair),
+            (b.joint, b.zone, b.point, b.pair)
+        );
         assert!((0..3).all(|c| (a.xyz[c] - b.xyz[c]).abs() < 1e-9));
     }
 }
@@ -191,7 +198,6 @@ fn every_arch_type_has_its_crown_radius_and_tangent() {
         let dy = (p[1] - m[1]) / (2.0 * h);
         let ddx = (p[0] + m[0]) / (h * h);
         let ddy = (p[1] + m[1]) / (h * h);
-        assert!(dy.abs() < 1e-9 * r, "{name}: tangent to x at the crown (dy/dφ = {dy})");
         let kappa = (dx * ddy - dy * ddx) / (dx * dx + dy * dy).powf(1.5);
         assert!(
             (kappa * r - 1.0).abs() < 1e-6,
@@ -203,17 +209,27 @@ fn every_arch_type_has_its_crown_radius_and_tangent() {
         let n = 20_000;
         let mut chords = 0.0;
         for i in 0..n {
-            let (a, b) = (c.point(phi_end * i as f64 / n as f64), c.point(phi_end * (i + 1) as f64 / n as f64));
+            let (a, b) = (
+                c.point(phi_end * i as f64 / n as f64),
+                c.point(phi_end * (i + 1) as f64 / n as f64),
+            );
             chords += (b[0] - a[0]).hypot(b[1] - a[1]);
         }
         let s = c.arc_length(phi_end);
-        assert!((chords / s - 1.0).abs() < 1e-6, "{name}: s = {s}, chords {chords}");
+        assert!(
+            (chords / s - 1.0).abs() < 1e-6,
+            "{name}: s = {s}, chords {chords}"
+        );
         let back = c.angle_at_length(s).unwrap();
         assert!((back - phi_end).abs() < 1e-12, "{name}: angle at s {back}");
-        for phi in [0.2, 0.5, 1.0] {
+        // at φ = 0: tangent to x at the crown
+        for phi in [0.0, 0.2, 0.5, 1.0] {
             let (a, b) = (c.point(phi - 1e-6), c.point(phi + 1e-6));
             let dir = (b[1] - a[1]).atan2(b[0] - a[0]);
-            assert!((dir - phi).abs() < 1e-8, "{name}: tangent at φ = {phi} points at {dir}");
+            assert!(
+                (dir - phi).abs() < 1e-8,
+                "{name}: tangent at φ = {phi} points at {dir}"
+            );
         }
     }
 }
@@ -226,7 +242,10 @@ fn small_case(table: &str, valley: &str) -> Result<Scene, String> {
         crest_length_m = 120.0\ncrest_left_length_m = 60.0\nelements_per_block = 1\nelements_across = 2\n\
         rock_depth_m = 20.0\nrock_margin_m = 20.0\n";
     let path = write_case(dir.path(), geometry, table, valley);
-    Scene::load(&path).map_err(|e| e.to_string().replace(&dir.path().display().to_string(), "DIR"))
+    Scene::load(&path).map_err(|e| {
+        e.to_string()
+            .replace(&dir.path().display().to_string(), "DIR")
+    })
 }
 
 const VALLEY: &str = "crest_distance_m,foundation_elevation_m\n0,40\n60,0\n120,40\n";
@@ -237,7 +256,11 @@ fn table(rows: &[&str]) -> String {
 
 #[test]
 fn a_good_small_table_meshes() {
-    let s = small_case(&table(&["0,0,10,10,10,80,80", "60,0,4,6,6,100,100"]), VALLEY).unwrap();
+    let s = small_case(
+        &table(&["0,0,10,10,10,80,80", "60,0,4,6,6,100,100"]),
+        VALLEY,
+    )
+    .unwrap();
     let m = app::build_mesh(&s, "x").unwrap();
     assert_eq!(m.blocks.len(), 4);
     // founded at the valley at the block centres (15, 45, 75, 105 m along: 30, 10, 10, 30 m), rounded down to 9 m zones
@@ -284,19 +307,33 @@ fn table_errors_name_file_line_and_column() {
         assert_eq!(got, want, "{what}");
     }
     let ok = table(&["0,0,10,10,10,80,80", "60,0,4,6,6,100,100"]);
-    let got = small_case(&ok, "crest_distance_m,foundation_elevation_m\n0,40\n60,-3\n100,40\n").unwrap_err();
+    let got = small_case(
+        &ok,
+        "crest_distance_m,foundation_elevation_m\n0,40\n60,-3\n100,40\n",
+    )
+    .unwrap_err();
     assert_eq!(
         got,
         "DIR/valley.csv:3:2 (foundation_elevation_m): expected an elevation within the dam, 0 to 60 m (geometry.base_elevation_m, crest_elevation_m), found \"-3\""
     );
-    let got = small_case(&ok, "crest_distance_m,foundation_elevation_m\n0,40\n60,0\n100,40\n").unwrap_err();
+    let got = small_case(
+        &ok,
+        "crest_distance_m,foundation_elevation_m\n0,40\n60,0\n100,40\n",
+    )
+    .unwrap_err();
     assert_eq!(
         got,
         "DIR/valley.csv:4:1: the valley ends at 100 m along the crest, before its right end (geometry.crest_length_m = 120 m)"
     );
     let got = small_case(&ok.replace("radius_right_m", "radius_rigth_m"), VALLEY).unwrap_err();
-    assert!(got.starts_with("DIR/arch.csv:2: expected the columns"), "{got}");
-    assert!(got.ends_with("(unknown column \"radius_rigth_m\")"), "{got}");
+    assert!(
+        got.starts_with("DIR/arch.csv:2: expected the columns"),
+        "{got}"
+    );
+    assert!(
+        got.ends_with("(unknown column \"radius_rigth_m\")"),
+        "{got}"
+    );
 }
 
 #[test]
