@@ -52,6 +52,11 @@
 //! Rock below the base uses the base ring. Since every node of a level k has
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its
 //! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
+//!
+//! The layout (levels, margins, rock, zone rounding, node placement) is
+//! shared with [`super::arch_table`]: [`block_row`], [`layer_boundaries`],
+//! [`zone_floor`] and [`node_positions`] over an [`ArchPlan`], the plan
+//! point of a level at an along-parameter (here φ) and across position.
 
 use super::geometry::{at_least, check, non_negative, positive, ArchGeometry};
 use super::grid::{self, BlockRow, Layers};

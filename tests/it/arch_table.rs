@@ -360,3 +360,58 @@ fn xiaowan_like_has_the_published_gross_dimensions() {
     // the deepest block reaches the base
     assert_eq!(m.blocks.iter().map(|b| b.base_layer).min(), Some(0));
 }
+
+#[test]
+fn every_arch_type_meshes_with_its_faces_at_the_crown_and_abutment() {
+    let types: [(&str, &str, &str); 5] = [
+        ("circular", "", ""),
+        (
+            "three_centred",
+            ",outer_radius_left_m,outer_radius_right_m,central_half_angle_left_deg,central_half_angle_right_deg",
+            ",150,160,15,20",
+        ),
+        ("parabolic", "", ""),
+        ("elliptical", ",axis_ratio_left,axis_ratio_right", ",1.5,1.3"),
+        ("log_spiral", ",spiral_growth_left,spiral_growth_right", ",0.3,0.2"),
+    ];
+    for (name, cols, coefs) in types {
+        let dir = tempfile::tempdir().unwrap();
+        let geometry = format!(
+            "[geometry]\nkind = \"arch_table\"\narch_type = \"{name}\"\ntable = \"arch.csv\"\n\
+             valley = \"valley.csv\"\nbase_elevation_m = 0.0\ncrest_elevation_m = 60.0\nn_blocks = 4\n\
+             crest_length_m = 120.0\ncrest_left_length_m = 60.0\nelements_per_block = 2\nelements_across = 2\n\
+             rock_depth_m = 20.0\nrock_margin_m = 20.0\n"
+        );
+        let table =
+            format!("{HEADER}{cols}\n0,0,10,10,10,80,80{coefs}\n60,0,4,6,6,100,100{coefs}\n");
+        let path = write_case(dir.path(), &geometry, &table, VALLEY);
+        let s = Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let m = app::build_mesh(&s, "x").unwrap_or_else(|e| panic!("{name}: {e}"));
+        let Geometry::ArchTable(g) = &s.geometry else {
+            unreachable!()
+        };
+        let row = g.tables.as_ref().unwrap().row_at(60.0);
+        let has = |p: [f64; 2]| {
+            m.nodes
+                .iter()
+                .any(|n| n[2] == 60.0 && (n[0] - p[0]).abs() < 1e-9 && (n[1] - p[1]).abs() < 1e-9)
+        };
+        // the crown's faces are the table's (a joint lies at the crown, 60 m along)
+        assert!(has([0.0, 0.0]) && has([0.0, 4.0]), "{name}: crown faces");
+        // at the left abutment the faces are T_A = 6 m apart along the normal
+        let kind = g.arch_type;
+        let left = HalfCurve {
+            kind,
+            arch: row.left,
+        };
+        let phi = left.angle_at_length(60.0).unwrap();
+        let p = left.point(phi);
+        let (c, n) = ([-p[0], 2.0 + p[1]], [-phi.sin(), -phi.cos()]);
+        let up = [c[0] + 3.0 * n[0], c[1] + 3.0 * n[1]];
+        let down = [c[0] - 3.0 * n[0], c[1] - 3.0 * n[1]];
+        assert!(
+            has(up) && has(down),
+            "{name}: abutment faces {up:?} {down:?}"
+        );
+    }
+}
