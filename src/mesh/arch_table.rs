@@ -79,8 +79,11 @@
 //! `models/demo_arch.toml` (circular, uniform thickness, its overhang,
 //! valley and joints) give the mesh of [`super::generate_arch`] (nodes within
 //! 1e-9 m, same elements, face pairs, zones); every curve type's crown
-//! radius and tangent; table and valley errors with file:line:column; the
-//! Xiaowan-like scene's mesh (gross dimensions, blocks and zones).
+//! radius, tangent, arc length and tangent-angle parametrisation; every
+//! type meshes with the table's crown faces and its abutment thickness T_A
+//! at the crest's ends; table and valley errors with file:line:column; the
+//! Xiaowan-like scene's mesh (gross dimensions, blocks and zones) against
+//! its schedules.
 
 use std::path::PathBuf;
 
@@ -88,7 +91,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arch::{self, Across, ArchPlan, RowCounts};
 use super::arch_curves::{ArchType, HalfArch, HalfCurve};
-use super::geometry::{at_least, check, non_negative, positive};
+use super::geometry::{at_least, check, non_negative, one, one_f, positive, two};
 use super::grid::{self, Layers};
 use super::{Mesh, MeshError};
 
@@ -143,16 +146,6 @@ pub struct ArchTableGeometry {
     /// written in a scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tables: Option<ArchTables>,
-}
-
-fn one() -> u32 {
-    1
-}
-fn two() -> u32 {
-    2
-}
-fn one_f() -> f64 {
-    1.0
 }
 
 /// The design tables of an [`ArchTableGeometry`].

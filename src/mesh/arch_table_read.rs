@@ -193,6 +193,25 @@ fn row_err(file: &str, line: usize, column: usize, message: impl Into<String>) -
     }
 }
 
+/// A data row has as many fields as the header.
+fn field_count(
+    file: &str,
+    line: usize,
+    fields: &[String],
+    expected: usize,
+) -> Result<(), ArchTableError> {
+    if fields.len() == expected {
+        return Ok(());
+    }
+    Err(ArchTableError::FieldCount {
+        file: file.to_string(),
+        line,
+        expected,
+        found: fields.len(),
+        text: ScheduleError::excerpt(&fields.join(",")),
+    })
+}
+
 /// Column index of every header name; an error for an unknown or repeated
 /// name or a missing `needed` one.
 fn header_map(
@@ -282,15 +301,7 @@ fn parse_arch(
     let map = header_map(&r, file, &needed, &allowed)?;
     let mut rows: Vec<(usize, ArchRow)> = Vec::with_capacity(r.rows.len());
     for (line, fields) in &r.rows {
-        if fields.len() != r.header.len() {
-            return Err(ArchTableError::FieldCount {
-                file: file.to_string(),
-                line: *line,
-                expected: r.header.len(),
-                found: fields.len(),
-                text: ScheduleError::excerpt(&fields.join(",")),
-            });
-        }
+        field_count(file, *line, fields, r.header.len())?;
         let l = Line {
             file,
             line: *line,
@@ -454,15 +465,7 @@ fn parse_valley(
     let tol = 1e-9 * (1.0 + (crest - base).abs() + length.abs());
     let mut out: Vec<(usize, [f64; 2])> = Vec::with_capacity(r.rows.len());
     for (line, fields) in &r.rows {
-        if fields.len() != r.header.len() {
-            return Err(ArchTableError::FieldCount {
-                file: file.to_string(),
-                line: *line,
-                expected: r.header.len(),
-                found: fields.len(),
-                text: ScheduleError::excerpt(&fields.join(",")),
-            });
-        }
+        field_count(file, *line, fields, r.header.len())?;
         let l = Line {
             file,
             line: *line,

@@ -104,13 +104,13 @@ pub struct ArchGeometry {
     pub rock_margin_elements: u32,
 }
 
-fn one() -> u32 {
+pub(super) fn one() -> u32 {
     1
 }
-fn two() -> u32 {
+pub(super) fn two() -> u32 {
     2
 }
-fn one_f() -> f64 {
+pub(super) fn one_f() -> f64 {
     1.0
 }
 fn two_f() -> f64 {
