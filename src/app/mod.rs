@@ -77,6 +77,7 @@ pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
     let mesh = match &scene.geometry {
         Geometry::Blocks(g) => mesh::generate_blocks(g, lift, zone),
         Geometry::Arch(g) => mesh::generate_arch(g, lift, zone),
+        Geometry::ArchTable(g) => mesh::generate_arch_table(g, lift, zone),
         Geometry::Mesh(g) => {
             let dir = Path::new(origin).parent().unwrap_or_else(|| Path::new(""));
             return load_mesh_file(&dir.join(&g.file), lift, zone);

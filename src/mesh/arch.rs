@@ -52,6 +52,11 @@
 //! Rock below the base uses the base ring. Since every node of a level k has
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its
 //! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
+//!
+//! The layout (levels, margins, rock, zone rounding, node placement) is
+//! shared with [`super::arch_table`]: [`block_row`], [`layer_boundaries`],
+//! [`zone_floor`] and [`node_positions`] over an [`ArchPlan`], the plan
+//! point of a level at an along-parameter (here φ) and across position.
 
 use super::geometry::{at_least, check, non_negative, positive, ArchGeometry};
 use super::grid::{self, BlockRow, Layers};
@@ -59,7 +64,7 @@ use super::{Mesh, MeshError};
 
 /// The arch's ring at one elevation.
 #[derive(Debug, Clone, Copy)]
-struct Ring {
+pub(super) struct Ring {
     /// Upstream-face radius.
     r_up: f64,
     /// Thickness.
@@ -95,7 +100,6 @@ fn foundation_layers(p: &ArchGeometry, layer_z: &[f64], zone_lifts: u32) -> Vec<
     let norm = 1.0 - f_min.powf(v);
     let h = p.height_m;
     let crest = p.base_elevation_m + h;
-    let n_layers = layer_z.len() - 1;
     fs.iter()
         .map(|f| {
             let shape = if norm > 0.0 {
@@ -104,18 +108,27 @@ fn foundation_layers(p: &ArchGeometry, layer_z: &[f64], zone_lifts: u32) -> Vec<
                 1.0
             };
             let zf = crest - h * shape.max(p.min_block_height_fraction).min(1.0);
-            let tol = 1e-9 * (1.0 + h);
-            let mut base = 0usize;
-            let mut l = 0usize;
-            while l < n_layers {
-                if layer_z[l] <= zf + tol {
-                    base = l;
-                }
-                l += zone_lifts as usize;
-            }
-            base as u32
+            zone_floor(layer_z, zf, zone_lifts)
         })
         .collect()
+}
+
+/// The highest zone boundary (a global layer index) at or below elevation
+/// `zf`, the lowest when `zf` is below the base: a block founded there
+/// holds whole zones.
+pub(super) fn zone_floor(layer_z: &[f64], zf: f64, zone_lifts: u32) -> u32 {
+    let n_layers = layer_z.len() - 1;
+    let h = layer_z[n_layers] - layer_z[0];
+    let tol = 1e-9 * (1.0 + h);
+    let mut base = 0usize;
+    let mut l = 0usize;
+    while l < n_layers {
+        if layer_z[l] <= zf + tol {
+            base = l;
+        }
+        l += zone_lifts as usize;
+    }
+    base as u32
 }
 
 /// Build the arch mesh of [`ArchGeometry`] with lifts of `lift_height` (m) and
@@ -126,29 +139,26 @@ pub fn generate_arch(
     zone_height: f64,
 ) -> Result<Mesh, MeshError> {
     let zone_lifts = check_params(p, lift_height, zone_height)?;
-    let layer_z = layer_boundaries(p, lift_height)?;
+    let layer_z = layer_boundaries(p.base_elevation_m, p.height_m, lift_height)?;
     let n_layers = layer_z.len() - 1;
-    let row = BlockRow {
+    let row = block_row(&RowCounts {
         n_blocks: p.n_blocks,
         elements_per_block: p.elements_per_block,
         elements_across: p.elements_across,
-        margin: if p.rock_margin_m > 0.0 {
-            p.rock_margin_elements as usize
-        } else {
-            0
-        },
-        rock_layers: if p.rock_depth_m > 0.0 {
-            p.rock_layers as usize
-        } else {
-            0
-        },
-        layers: n_layers as u64,
-        rock_beyond_abutments: true,
-    };
-    row.size()?;
+        rock_depth_m: p.rock_depth_m,
+        rock_layers: p.rock_layers,
+        rock_margin_m: p.rock_margin_m,
+        rock_margin_elements: p.rock_margin_elements,
+        n_layers,
+    })?;
     let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, &layer_z);
     let rings = rings(p, &zs)?;
-    let pos = node_positions(p, &row, &rings, &zs);
+    let phi_total = p.central_angle_deg.to_radians();
+    let nd = p.n_blocks as usize * p.elements_per_block as usize;
+    let along: Vec<f64> = (0..=nd)
+        .map(|i| -0.5 * phi_total + phi_total * i as f64 / nd as f64)
+        .collect();
+    let pos = node_positions(rings.as_slice(), &row, p.rock_margin_m, &along, &zs);
     let blocks = foundation_layers(p, &layer_z, zone_lifts)
         .into_iter()
         .map(|b| (b, n_layers as u32 - b))
@@ -161,6 +171,43 @@ pub fn generate_arch(
         blocks,
     };
     row.build(pos, layers)
+}
+
+/// The cell counts of an arch's [`BlockRow`] (both arch generators).
+pub(super) struct RowCounts {
+    pub n_blocks: u32,
+    pub elements_per_block: u32,
+    pub elements_across: u32,
+    pub rock_depth_m: f64,
+    pub rock_layers: u32,
+    pub rock_margin_m: f64,
+    pub rock_margin_elements: u32,
+    /// Concrete element layers (one per lift).
+    pub n_layers: usize,
+}
+
+/// The arch's logical grid, checked for size: no margin cells without a
+/// margin, no rock layers without rock depth, rock beyond the abutments.
+pub(super) fn block_row(c: &RowCounts) -> Result<BlockRow, MeshError> {
+    let row = BlockRow {
+        n_blocks: c.n_blocks,
+        elements_per_block: c.elements_per_block,
+        elements_across: c.elements_across,
+        margin: if c.rock_margin_m > 0.0 {
+            c.rock_margin_elements as usize
+        } else {
+            0
+        },
+        rock_layers: if c.rock_depth_m > 0.0 {
+            c.rock_layers as usize
+        } else {
+            0
+        },
+        layers: c.n_layers as u64,
+        rock_beyond_abutments: true,
+    };
+    row.size()?;
+    Ok(row)
 }
 
 /// Checks every parameter in scene order; returns the lifts per zone.
@@ -204,11 +251,9 @@ fn check_params(p: &ArchGeometry, lift_height: f64, zone_height: f64) -> Result<
     grid::zone_lifts(lift_height, zone_height)
 }
 
-/// Concrete layer boundaries: one layer per lift from the base, the crest
-/// layer absorbing the remainder of the height.
-fn layer_boundaries(p: &ArchGeometry, lift_height: f64) -> Result<Vec<f64>, MeshError> {
-    let h = p.height_m;
-    let base = p.base_elevation_m;
+/// Concrete layer boundaries from `base` over the height `h`: one layer per
+/// lift, the crest layer absorbing the remainder of the height.
+pub(super) fn layer_boundaries(base: f64, h: f64, lift_height: f64) -> Result<Vec<f64>, MeshError> {
     let ratio = h / lift_height;
     check(ratio < 1e6, "height_m", || {
         format!("is more than a million lifts ({h} m with {lift_height} m lifts)")
@@ -242,43 +287,82 @@ fn rings(p: &ArchGeometry, zs: &[f64]) -> Result<Vec<Ring>, MeshError> {
     Ok(rings)
 }
 
-/// Grid nodes (i fastest): radial across the dam and in the upstream margin,
-/// along +y in the downstream margin, along the crest tangent beyond the
-/// abutments (module doc, "Rock").
-fn node_positions(p: &ArchGeometry, row: &BlockRow, rings: &[Ring], zs: &[f64]) -> Vec<[f64; 3]> {
-    let (m, margin) = (row.margin, p.rock_margin_m);
-    let na = p.elements_across as usize;
-    let nd = p.n_blocks as usize * p.elements_per_block as usize;
+/// Where a grid line j lies across the dam (module doc, "Rock").
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Across {
+    /// This far \[m\] beyond the upstream face, along its outward normal.
+    Upstream(f64),
+    /// Fraction a ∈ [0, 1] of the way from the upstream to the downstream face.
+    Dam(f64),
+    /// This far \[m\] beyond the downstream face, along +y.
+    Downstream(f64),
+}
+
+/// An arch's plan shape at each logical level: what [`node_positions`]
+/// needs from a generator.
+pub(super) trait ArchPlan {
+    /// Plan point (x, y) at level `k`, along-parameter `u` (a grid i-line of
+    /// the dam; for both arch generators the angle φ of its normal) and
+    /// across position `across`, moved `ext` metres along the arch's tangent
+    /// at `u` (towards increasing `u`; the rock beyond the abutments).
+    fn plan_point(&self, k: usize, u: f64, across: Across, ext: f64) -> [f64; 2];
+}
+
+impl ArchPlan for [Ring] {
+    fn plan_point(&self, k: usize, phi: f64, across: Across, ext: f64) -> [f64; 2] {
+        let rg = self[k];
+        let (r, dy) = match across {
+            Across::Upstream(d) => (rg.r_up + d, 0.0),
+            Across::Dam(a) => (rg.r_up - rg.t * a, 0.0),
+            Across::Downstream(d) => (rg.r_up - rg.t, d),
+        };
+        let (s, c) = phi.sin_cos();
+        [r * s + ext * c, rg.yc - r * c + dy + ext * s]
+    }
+}
+
+/// Grid nodes (i fastest) of the levels `zs`: the dam's i-lines at the
+/// along-parameters `along` (`n_blocks·elements_per_block + 1` of them),
+/// across it from the upstream to the downstream face, the upstream margin
+/// along the face's normal, the downstream one along +y, the margins beyond
+/// the abutments along the end tangents (module doc, "Rock").
+pub(super) fn node_positions(
+    plan: &(impl ArchPlan + ?Sized),
+    row: &BlockRow,
+    margin: f64,
+    along_u: &[f64],
+    zs: &[f64],
+) -> Vec<[f64; 3]> {
+    let m = row.margin;
+    let na = row.elements_across as usize;
+    let nd = along_u.len() - 1;
     let (ni, nj) = (nd + 2 * m, na + 2 * m);
-    let phi_total = p.central_angle_deg.to_radians();
-    let phi_s = -0.5 * phi_total;
-    let phi_e = 0.5 * phi_total;
-    // Per i: (angle, extension along the tangent).
+    // Per i: (along-parameter, extension along the tangent).
     let along: Vec<(f64, f64)> = (0..=ni)
         .map(|i| {
             if i < m {
-                (phi_s, -margin * (m - i) as f64 / m as f64)
+                (along_u[0], -margin * (m - i) as f64 / m as f64)
             } else if i > m + nd {
-                (phi_e, margin * (i - m - nd) as f64 / m as f64)
+                (along_u[nd], margin * (i - m - nd) as f64 / m as f64)
             } else {
-                (phi_s + phi_total * (i - m) as f64 / nd as f64, 0.0)
+                (along_u[i - m], 0.0)
             }
         })
         .collect();
 
     let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * zs.len());
-    for (rg, &z) in rings.iter().zip(zs) {
+    for (k, &z) in zs.iter().enumerate() {
         for j in 0..=nj {
-            let (r, dy) = if j < m {
-                (rg.r_up + margin * (m - j) as f64 / m as f64, 0.0)
+            let across = if j < m {
+                Across::Upstream(margin * (m - j) as f64 / m as f64)
             } else if j <= m + na {
-                (rg.r_up - rg.t * (j - m) as f64 / na as f64, 0.0)
+                Across::Dam((j - m) as f64 / na as f64)
             } else {
-                (rg.r_up - rg.t, margin * (j - m - na) as f64 / m as f64)
+                Across::Downstream(margin * (j - m - na) as f64 / m as f64)
             };
-            for &(phi, ext) in &along {
-                let (s, c) = phi.sin_cos();
-                pos.push([r * s + ext * c, rg.yc - r * c + dy + ext * s, z]);
+            for &(u, ext) in &along {
+                let [x, y] = plan.plan_point(k, u, across, ext);
+                pos.push([x, y, z]);
             }
         }
     }

@@ -10,6 +10,8 @@ use super::MeshError;
 pub enum Geometry {
     Blocks(BlocksGeometry),
     Arch(ArchGeometry),
+    /// An arch dam by design tables (CSV files beside the scene).
+    ArchTable(super::arch_table::ArchTableGeometry),
     Mesh(MeshGeometry),
 }
 
@@ -112,13 +114,13 @@ pub struct ArchGeometry {
     pub rock_margin_elements: u32,
 }
 
-fn one() -> u32 {
+pub(super) fn one() -> u32 {
     1
 }
-fn two() -> u32 {
+pub(super) fn two() -> u32 {
     2
 }
-fn one_f() -> f64 {
+pub(super) fn one_f() -> f64 {
     1.0
 }
 fn two_f() -> f64 {

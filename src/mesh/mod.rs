@@ -53,9 +53,12 @@
 //!   upstream face). Concrete faces on the bottom of a rock-less model are
 //!   `Far`. Lift tops and joint faces are internal, not surfaces.
 //!
-//! See [`blocks`] and [`arch`] for the shapes.
+//! See [`blocks`], [`arch`] and [`arch_table`] for the shapes.
 
 pub mod arch;
+pub mod arch_curves;
+pub mod arch_table;
+mod arch_table_read;
 pub mod blocks;
 pub mod geometry;
 mod grid;
@@ -69,6 +72,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use arch::generate_arch;
+pub use arch_table::generate_arch_table;
 pub use blocks::generate_blocks;
 pub use vtu::{write_pvd, write_vtu};
 

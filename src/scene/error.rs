@@ -10,6 +10,7 @@ use thiserror::Error;
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+use crate::mesh::arch_table::{ArchTableError, ArchTableGeometry};
 use crate::mesh::geometry::{ArchGeometry, BlocksGeometry};
 
 /// Everything that can go wrong while loading a scene file.
@@ -51,6 +52,9 @@ pub enum SceneError {
         /// Full message, starting with the key.
         message: String,
     },
+    /// A CSV table of the geometry (`arch_table`'s `table` or `valley`).
+    #[error(transparent)]
+    Table(#[from] ArchTableError),
 }
 
 fn fmt_parse(origin: &str, position: Option<(usize, usize)>, message: &str) -> String {
@@ -391,6 +395,7 @@ fn refine_geometry_error(
     let result = match kind.as_str() {
         "blocks" => toml::from_str::<Only<BlocksGeometry>>(&blanked).map(|_| ()),
         "arch" => toml::from_str::<Only<ArchGeometry>>(&blanked).map(|_| ()),
+        "arch_table" => toml::from_str::<Only<ArchTableGeometry>>(&blanked).map(|_| ()),
         _ => return None,
     };
     result.err()

@@ -10,7 +10,7 @@
 //!
 //! | table | required | content |
 //! |---|---|---|
-//! | `[geometry]` | yes | `kind = "blocks"` or `"arch"` plus the generator's parameters ([`Geometry`]) |
+//! | `[geometry]` | yes | `kind = "blocks"`, `"arch"` or `"arch_table"` (with its CSV tables beside the scene, read by [`Scene::load`]) plus the generator's parameters ([`Geometry`]) |
 //! | `[lifts]` | yes | `height_m` |
 //! | `[joints]` | yes | `zone_height_m`, a whole number of lifts |
 //! | `[concrete]` | yes | `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `[concrete.adiabatic]` |
@@ -93,7 +93,7 @@ pub struct Scene {
     /// Effects simulated (see [`Effect`]).
     #[serde(default)]
     pub effects: Vec<Effect>,
-    /// Mesh generator and its parameters (`[geometry]`, `kind = "blocks" | "arch"`).
+    /// Mesh generator and its parameters (`[geometry]`, `kind = "blocks" | "arch" | "arch_table"`).
     pub geometry: Geometry,
     /// Lift (pour layer) height.
     pub lifts: Lifts,
@@ -536,7 +536,20 @@ impl Scene {
             path: path.to_path_buf(),
             source,
         })?;
-        Scene::from_toml_str(&text, &path.display().to_string())
+        let mut scene = Scene::from_toml_str(&text, &path.display().to_string())?;
+        scene.read_geometry_tables(path)?;
+        Ok(scene)
+    }
+
+    /// Reads the CSV tables of an `arch_table` geometry, relative to the
+    /// folder of the scene file at `scene_path`, into the geometry (so a
+    /// scene kept as JSON carries them); nothing to do for other kinds.
+    pub fn read_geometry_tables(&mut self, scene_path: &Path) -> Result<(), SceneError> {
+        if let Geometry::ArchTable(g) = &mut self.geometry {
+            let dir = scene_path.parent().unwrap_or_else(|| Path::new(""));
+            g.tables = Some(crate::mesh::arch_table::load_tables(g, dir)?);
+        }
+        Ok(())
     }
 
     /// Parse and validate scene text; `origin` names it in error messages

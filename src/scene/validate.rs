@@ -2,6 +2,7 @@
 //! dotted key it is about, e.g. `concrete.conductivity_w_mk must be > 0, got -2.1`.
 
 use crate::material::{AdiabaticRise, PipeLayout};
+use crate::mesh::arch_table::ArchTableGeometry;
 use crate::mesh::geometry::{ArchGeometry, BlocksGeometry, Geometry};
 use crate::vocab::Invalid;
 
@@ -26,6 +27,7 @@ pub(super) fn validate(s: &Scene) -> Check {
     match &s.geometry {
         Geometry::Blocks(g) => blocks(g, s)?,
         Geometry::Arch(g) => arch(g, s)?,
+        Geometry::ArchTable(g) => arch_table(g, s)?,
         // The file's blocks, rock and layers are checked when it is read (mesh::import::dam).
         Geometry::Mesh(g) => {
             if g.file.trim().is_empty() {
@@ -500,6 +502,76 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
             ),
         ));
     }
+    rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
+}
+
+/// The scalar keys of an `arch_table` geometry (its CSV tables are checked
+/// when [`Scene::load`] reads them).
+fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
+    if g.n_blocks < 2 {
+        return Err(SceneError::invalid(
+            "geometry.n_blocks",
+            format!(
+                "geometry.n_blocks must be >= 2 for an arch, got {}",
+                g.n_blocks
+            ),
+        ));
+    }
+    finite("geometry.base_elevation_m", g.base_elevation_m)?;
+    finite("geometry.crest_elevation_m", g.crest_elevation_m)?;
+    let height = g.crest_elevation_m - g.base_elevation_m;
+    if height < s.joints.zone_height_m {
+        return Err(SceneError::invalid(
+            "geometry.crest_elevation_m",
+            format!(
+                "geometry.crest_elevation_m = {} must be at least joints.zone_height_m = {} above geometry.base_elevation_m = {}",
+                g.crest_elevation_m, s.joints.zone_height_m, g.base_elevation_m
+            ),
+        ));
+    }
+    positive("geometry.crest_length_m", g.crest_length_m)?;
+    in_range(
+        "geometry.crest_left_length_m",
+        g.crest_left_length_m / g.crest_length_m,
+        0.0,
+        1.0,
+        false,
+    )
+    .map_err(|_| {
+        SceneError::invalid(
+            "geometry.crest_left_length_m",
+            format!(
+                "geometry.crest_left_length_m = {} must be in (0, geometry.crest_length_m = {})",
+                g.crest_left_length_m, g.crest_length_m
+            ),
+        )
+    })?;
+    if !g.block_widths_m.is_empty() {
+        let sum: f64 = g.block_widths_m.iter().sum();
+        if g.block_widths_m.len() != g.n_blocks as usize
+            || g.block_widths_m
+                .iter()
+                .any(|w| !(w.is_finite() && *w > 0.0))
+            || (sum - g.crest_length_m).abs() > 1e-6 * g.crest_length_m
+        {
+            return Err(SceneError::invalid(
+                "geometry.block_widths_m",
+                format!(
+                    "geometry.block_widths_m must be n_blocks = {} widths > 0 summing to geometry.crest_length_m = {}, got {} summing to {sum}",
+                    g.n_blocks,
+                    g.crest_length_m,
+                    g.block_widths_m.len()
+                ),
+            ));
+        }
+    }
+    positive("geometry.thickness_exponent", g.thickness_exponent)?;
+    at_least_one("geometry.elements_per_block", g.elements_per_block)?;
+    at_least_one("geometry.elements_across", g.elements_across)?;
+    non_negative("geometry.rock_depth_m", g.rock_depth_m)?;
+    at_least_one("geometry.rock_layers", g.rock_layers)?;
+    non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
+    at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
 

@@ -95,6 +95,7 @@ pub use check::{
 };
 pub use error::ScheduleError;
 pub use layout::{check_against, DamLayout, ZoneExtent};
+pub(crate) use read::line_at;
 pub use synth::{synthesize, SynthParams};
 pub use warning::Warning;
 pub use write::write_dir;

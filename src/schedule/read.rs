@@ -173,7 +173,7 @@ fn parse_table_alt(
 /// 1-based line of the first character at or after byte `offset` that is not
 /// a line break (the csv reader may report a record's start before the blank
 /// lines it skipped, and its own line counter misses some of them).
-fn line_at(text: &str, offset: usize) -> usize {
+pub(crate) fn line_at(text: &str, offset: usize) -> usize {
     let bytes = text.as_bytes();
     let mut at = offset.min(bytes.len());
     while at < bytes.len() && (bytes[at] == b'\n' || bytes[at] == b'\r') {

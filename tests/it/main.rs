@@ -6,6 +6,7 @@
 
 mod common;
 
+mod arch_table;
 mod cli_plan;
 mod cli_run;
 mod contact_qp;

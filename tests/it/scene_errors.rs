@@ -300,7 +300,7 @@ fn unknown_geometry_kind() {
     let text = replaced(BASE, "kind = \"blocks\"", "kind = \"gravity\"");
     assert_eq!(
         err(&text),
-        "models/x.toml:6:8: geometry.kind: unknown variant `gravity`, expected one of `blocks`, `arch`, `mesh`"
+        "models/x.toml:6:8: geometry.kind: unknown variant `gravity`, expected one of `blocks`, `arch`, `arch_table`, `mesh`"
     );
 }
 
