@@ -27,6 +27,7 @@ mod mesh_generators;
 mod out_safety;
 mod planner_limits;
 mod planner_supercool;
+mod planner_together;
 mod report_files;
 mod reproducible;
 mod restart;
