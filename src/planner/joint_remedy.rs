@@ -206,12 +206,7 @@ pub fn least_cost(
         e[i] = -1.0;
         rows.push((e, -lo[i]));
     }
-    let a = CscMatrix::from(
-        &rows
-            .iter()
-            .map(|r| r.0.clone())
-            .collect::<Vec<Vec<f64>>>(),
-    );
+    let a = CscMatrix::from(&rows.iter().map(|r| r.0.clone()).collect::<Vec<Vec<f64>>>());
     let b: Vec<f64> = rows.iter().map(|r| r.1).collect();
     let p = CscMatrix::new(n, n, vec![0; n + 1], vec![], vec![]);
     let cl = DefaultSettings::<f64> {
@@ -449,7 +444,9 @@ pub(super) fn optimise(
         s: vec![vec![0.0; ids.len()]; seen[0].m.len()],
     };
     for p in &seen[1..] {
-        let i = (0..ids.len()).find(|&i| p.k[i] != zbz[i]).expect("one step");
+        let i = (0..ids.len())
+            .find(|&i| p.k[i] != zbz[i])
+            .expect("one step");
         for (r, row) in model.s.iter_mut().enumerate() {
             let ds = model.m0[r] - p.m[r];
             row[i] = if ds.is_finite() { ds } else { 0.0 };
@@ -576,7 +573,15 @@ mod tests {
     #[test]
     fn neighbours_form_sets_by_shared_blocks_and_levels() {
         let z = ZoneId::new;
-        let ids = [z(1, 2), z(3, 2), z(1, 4), z(2, 2), z(4, 3), z(4, 2), z(2, 9)];
+        let ids = [
+            z(1, 2),
+            z(3, 2),
+            z(1, 4),
+            z(2, 2),
+            z(4, 3),
+            z(4, 2),
+            z(2, 9),
+        ];
         let free = [true, true, true, true, true, true, false];
         let s = sets(&ids, &free);
         assert_eq!(

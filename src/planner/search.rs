@@ -9,6 +9,12 @@
 //!   verdict. Cooling a zone opens its neighbours too, so the combined
 //!   answer is verified by one more run (and a zone that fails there gets
 //!   one step more, up to the maximum);
+//! - **supercooling together**: zones that are neighbours (sharing a block,
+//!   at the same or the next level) are then chosen as one least-cost set
+//!   from that answer by a linear program on finite-difference
+//!   sensitivities, each set verified by re-simulation ([`super::joint_remedy`]);
+//!   the zone-by-zone answer stays when nothing cheaper is verified. It is
+//!   part of the supercooling search (and of its memo part);
 //! - **delay**: one run with the flagged zones left ungrouted and every day
 //!   of the delay window a step end, read bottom-up per joint; zones above
 //!   on the same joint planned earlier than the new date move with it;
@@ -33,7 +39,8 @@ use super::limits;
 use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, SupercoolPart, Verified};
 use super::plan::zone_history;
 use super::readiness::{
-    ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory, ZoneReadiness,
+    ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory,
+    ZoneReadiness,
 };
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
@@ -744,7 +751,8 @@ fn chosen_together(t: &joint_remedy::Together, step: f64, out: &mut Found<Superc
         if set.iter().all(|z| t.ks[z] == t.zone_by_zone[z]) {
             continue;
         }
-        let sum = |ks: &BTreeMap<ZoneId, u32>| -> f64 { set.iter().map(|z| ks[z] as f64 * step).sum() };
+        let sum =
+            |ks: &BTreeMap<ZoneId, u32>| -> f64 { set.iter().map(|z| ks[z] as f64 * step).sum() };
         let (set_c, set_zone_by_zone_c) = (sum(&t.ks), sum(&t.zone_by_zone));
         for z in set {
             out.insert(
@@ -804,7 +812,8 @@ fn supercool_candidates<'z>(
 
 /// Builds the schedules with each zone supercooled by its grid step count;
 /// returns them and the zones none of whose stages could be edited.
-pub(super) type BuildSupercooled<'b> = dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>) + 'b;
+pub(super) type BuildSupercooled<'b> =
+    dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>) + 'b;
 
 /// Runs every candidate at the largest supercooling: the zones it makes
 /// groutable get a bracket [0, max]; the others their reason in `out`.

@@ -204,7 +204,11 @@ fn flagged_details(out: &mut String, plan: &Plan) {
             let _ = writeln!(out, "{l}");
         }
         // Neighbours supercooled as one set: say so, and what it saved.
-        if let Some(r) = z.remedy.as_ref().filter(|r| r.choice == RemedyChoice::Supercool) {
+        if let Some(r) = z
+            .remedy
+            .as_ref()
+            .filter(|r| r.choice == RemedyChoice::Supercool)
+        {
             if r.supercool.as_ref().is_some_and(|o| o.together.is_some()) {
                 for l in wrap(&r.note, "    ", "    ", LINE_WIDTH) {
                     let _ = writeln!(out, "{l}");

@@ -24,8 +24,7 @@ use crate::common::{date, repo};
 /// The plan's zones as report.json has them.
 fn zones(p: &crate::common::Planned) -> Vec<ZoneReadiness> {
     let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(p.out.join("report.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(p.out.join("report.json")).unwrap()).unwrap();
     serde_json::from_value(json["zones"].clone()).unwrap()
 }
 
@@ -53,7 +52,12 @@ fn check(inputs: &Inputs, s: &Schedules, keys: &[ZoneId]) -> Vec<(bool, String)>
     keys.iter()
         .map(|&k| {
             let r = rules.evaluate(&idx, k, days[&k], &days);
-            let words = format!("{k}: {} {:?} {}", r.verdict.as_str(), r.temp_a_c, r.reasons());
+            let words = format!(
+                "{k}: {} {:?} {}",
+                r.verdict.as_str(),
+                r.temp_a_c,
+                r.reasons()
+            );
             (r.verdict.groutable(), words)
         })
         .collect()
@@ -115,7 +119,10 @@ fn neighbours_chosen_together_cost_less_and_are_the_least_on_the_grid() {
         .collect();
     let pair = [ZoneId::new(2, 2), ZoneId::new(3, 2)];
     let ids: Vec<ZoneId> = together.iter().map(|z| z.zone_id()).collect();
-    assert_eq!(ids, pair, "the pair sharing block 3 is chosen together:\n{stdout}");
+    assert_eq!(
+        ids, pair,
+        "the pair sharing block 3 is chosen together:\n{stdout}"
+    );
 
     // The set costs strictly less than zone by zone, by the figures of the
     // same search; over the plan, never more.
@@ -152,13 +159,19 @@ fn neighbours_chosen_together_cost_less_and_are_the_least_on_the_grid() {
         .sum();
     assert!((t.set_c - set).abs() < 1e-9, "{t:?}");
     assert!(t.set_c <= t.set_zone_by_zone_c - step + 1e-9, "{t:?}");
-    assert!(total < zone_by_zone_total, "{total} against {zone_by_zone_total}");
+    assert!(
+        total < zone_by_zone_total,
+        "{total} against {zone_by_zone_total}"
+    );
     println!(
         "supercooling: {total:.2} °C chosen together against {zone_by_zone_total:.2} °C zone by zone; \
          the pair {:.2} against {:.2}",
         t.set_c, t.set_zone_by_zone_c
     );
-    assert!(stdout.contains("supercooled together with joint 3 zone 2"), "{stdout}");
+    assert!(
+        stdout.contains("supercooled together with joint 3 zone 2"),
+        "{stdout}"
+    );
 
     // The remedied schedules are the plan's edit of these supercoolings,
     // and simulated from scratch they make the pair groutable.
