@@ -11,6 +11,8 @@
 //! - [`edit`]: the schedule edits a remedy makes (supercooling from the as-of
 //!   date on, moved grouting dates);
 //! - [`search`]: the remedy search, every answer a re-simulation;
+//! - [`joint_remedy`]: neighbouring zones' supercooling chosen together as
+//!   a least-cost linear program, verified by re-simulation;
 //! - [`whatif`]: one zone's remedy of the engineer's choosing, re-simulated
 //!   the same way (the TUI's what-if);
 //! - [`plan`]: all of it for one scene and schedules, into a [`Plan`]
@@ -24,6 +26,7 @@
 //! (exit codes, atomic run folders, weekly restart, joint meters, bad input).
 
 pub mod edit;
+pub mod joint_remedy;
 pub mod limits;
 pub mod memo;
 pub mod plan;

@@ -157,6 +157,23 @@ pub struct SupercoolOption {
     pub delta_c: f64,
     /// aperture at the deciding point on the planned date with it [mm]
     pub aperture_mm: f64,
+    /// set when the supercooling was chosen together with neighbouring
+    /// zones, at less cost than zone by zone (`planner::joint_remedy`)
+    #[serde(default)]
+    pub together: Option<ChosenTogether>,
+}
+
+/// A supercooling chosen with its neighbours' as one least-cost set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChosenTogether {
+    /// the other zones of the set
+    pub with: Vec<ZoneId>,
+    /// this zone's supercooling by the zone-by-zone search [°C]
+    pub zone_by_zone_c: f64,
+    /// the set's supercooling summed over its zones, chosen together and
+    /// zone by zone [°C]
+    pub set_c: f64,
+    pub set_zone_by_zone_c: f64,
 }
 
 /// Delay of the zone's grouting.

@@ -9,6 +9,12 @@
 //!   verdict. Cooling a zone opens its neighbours too, so the combined
 //!   answer is verified by one more run (and a zone that fails there gets
 //!   one step more, up to the maximum);
+//! - **supercooling together**: zones that are neighbours (sharing a block,
+//!   at the same or the next level) are then chosen as one least-cost set
+//!   from that answer by a linear program on finite-difference
+//!   sensitivities, each set verified by re-simulation ([`super::joint_remedy`]);
+//!   the zone-by-zone answer stays when nothing cheaper is verified. It is
+//!   part of the supercooling search (and of its memo part);
 //! - **delay**: one run with the flagged zones left ungrouted and every day
 //!   of the delay window a step end, read bottom-up per joint; zones above
 //!   on the same joint planned earlier than the new date move with it;
@@ -28,11 +34,13 @@ use crate::sim::{History, SimError};
 use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
+use super::joint_remedy;
 use super::limits;
 use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, SupercoolPart, Verified};
 use super::plan::zone_history;
 use super::readiness::{
-    DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory, ZoneReadiness,
+    ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory,
+    ZoneReadiness,
 };
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
@@ -61,15 +69,15 @@ pub fn grout_days(rules: &Rules, s: &Schedules) -> HashMap<ZoneId, Day> {
         .collect()
 }
 
-struct Ctx<'x, 'r, 'a> {
-    runner: &'x Runner<'a>,
+pub(super) struct Ctx<'x, 'r, 'a> {
+    pub(super) runner: &'x Runner<'a>,
     /// remedies act from this date on
     as_of: NaiveDate,
-    rules: &'x Rules<'r>,
+    pub(super) rules: &'x Rules<'r>,
     layout: &'x DamLayout,
-    progress: &'x mut dyn FnMut(&str),
+    pub(super) progress: &'x mut dyn FnMut(&str),
     /// the runs this search made, and the last day it read
-    runs: usize,
+    pub(super) runs: usize,
     read_until: Day,
 }
 
@@ -103,7 +111,7 @@ impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
         self.read_until = self.read_until.max(day);
     }
 
-    fn check(&self, h: &History, s: &Schedules, key: ZoneId, day: Day) -> ZoneReadiness {
+    pub(super) fn check(&self, h: &History, s: &Schedules, key: ZoneId, day: Day) -> ZoneReadiness {
         let grout = grout_days(self.rules, s);
         self.rules.evaluate(&HistoryIndex::new(h), key, day, &grout)
     }
@@ -307,7 +315,20 @@ fn propose(
         (None, Some(_)) => RemedyChoice::Delay,
         (None, None) => RemedyChoice::None,
     };
+    let together = sc.as_ref().and_then(|o| o.together.as_ref());
     let note = match choice {
+        RemedyChoice::Supercool if together.is_some() => {
+            let t = together.expect("some");
+            let with: Vec<String> = t.with.iter().map(ZoneId::to_string).collect();
+            format!(
+                "supercooled together with {}: {:.2} °C in all against {:.2} °C zone by zone \
+                 ({:.2} °C for this zone alone)",
+                with.join(", "),
+                t.set_c,
+                t.set_zone_by_zone_c,
+                t.zone_by_zone_c
+            )
+        }
         RemedyChoice::Supercool => match cost_dl {
             Some(c) => format!(
                 "supercooling costs {:.2} against {:.2} for the delay",
@@ -558,7 +579,7 @@ pub(crate) fn lifts_above(rules: &Rules) -> u32 {
 /// How far a zone is from passing the rules cooling can fix, per rule
 /// (aperture in mm above the limit, temperature in °C below the limit);
 /// every entry ≥ 0 when they pass.
-fn margins(r: &ZoneReadiness) -> [f64; 2] {
+pub(super) fn margins(r: &ZoneReadiness) -> [f64; 2] {
     let mut m = [f64::INFINITY; 2];
     for c in &r.checks {
         match (c.rule, c.value) {
@@ -703,12 +724,55 @@ fn supercool_search(
                     delta_c: b.hi.0 as f64 * step,
                     // the deciding aperture of the run that passed
                     aperture_mm: b.hi.1[0] + s.min_aperture_mm,
+                    together: None,
                 }),
                 String::new(),
             ),
         );
     }
+    // Neighbours chosen together, at least cost (issue 15 item 3).
+    let group: Vec<&ZoneReadiness> = cands
+        .iter()
+        .copied()
+        .filter(|z| brackets.contains_key(&z.zone_id()))
+        .collect();
+    let zbz: Vec<u32> = group.iter().map(|z| brackets[&z.zone_id()].hi.0).collect();
+    if let Some(t) = joint_remedy::optimise(ctx, &group, &zbz, k_max, &span, &build)? {
+        chosen_together(&t, step, &mut out);
+    }
     Ok(out)
+}
+
+/// Writes each set of neighbours the joint step changed into `out` (each
+/// zone of the set names the others); the sets together cost less than
+/// zone by zone (`joint_remedy::optimise` keeps no dearer point).
+fn chosen_together(t: &joint_remedy::Together, step: f64, out: &mut Found<SupercoolOption>) {
+    for set in &t.sets {
+        if set.iter().all(|z| t.ks[z] == t.zone_by_zone[z]) {
+            continue;
+        }
+        let sum =
+            |ks: &BTreeMap<ZoneId, u32>| -> f64 { set.iter().map(|z| ks[z] as f64 * step).sum() };
+        let (set_c, set_zone_by_zone_c) = (sum(&t.ks), sum(&t.zone_by_zone));
+        for z in set {
+            out.insert(
+                *z,
+                (
+                    Some(SupercoolOption {
+                        delta_c: t.ks[z] as f64 * step,
+                        aperture_mm: t.apertures[z],
+                        together: Some(ChosenTogether {
+                            with: set.iter().copied().filter(|w| w != z).collect(),
+                            zone_by_zone_c: t.zone_by_zone[z] as f64 * step,
+                            set_c,
+                            set_zone_by_zone_c,
+                        }),
+                    }),
+                    String::new(),
+                ),
+            );
+        }
+    }
 }
 
 /// The flagged zones that supercooling may fix: those failing only the
@@ -748,7 +812,8 @@ fn supercool_candidates<'z>(
 
 /// Builds the schedules with each zone supercooled by its grid step count;
 /// returns them and the zones none of whose stages could be edited.
-type BuildSupercooled<'b> = dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>) + 'b;
+pub(super) type BuildSupercooled<'b> =
+    dyn Fn(&BTreeMap<ZoneId, u32>) -> (Schedules, Vec<ZoneId>) + 'b;
 
 /// Runs every candidate at the largest supercooling: the zones it makes
 /// groutable get a bracket [0, max]; the others their reason in `out`.

@@ -203,6 +203,18 @@ fn flagged_details(out: &mut String, plan: &Plan) {
         for l in wrap(&remedy, "  → remedy: ", "    ", LINE_WIDTH) {
             let _ = writeln!(out, "{l}");
         }
+        // Neighbours supercooled as one set: say so, and what it saved.
+        if let Some(r) = z
+            .remedy
+            .as_ref()
+            .filter(|r| r.choice == RemedyChoice::Supercool)
+        {
+            if r.supercool.as_ref().is_some_and(|o| o.together.is_some()) {
+                for l in wrap(&r.note, "    ", "    ", LINE_WIDTH) {
+                    let _ = writeln!(out, "{l}");
+                }
+            }
+        }
         // A supercooling a site limit stopped: which limit, in full.
         if let Some(r) = z.remedy.as_ref() {
             for b in &r.limited {

@@ -199,6 +199,7 @@ mod tests {
             supercool: Some(SupercoolOption {
                 delta_c: 1.25,
                 aperture_mm: 0.6234,
+                together: None,
             }),
             delay: Some(DelayOption {
                 days: 12,

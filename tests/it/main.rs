@@ -29,6 +29,7 @@ mod mesh_import;
 mod out_safety;
 mod planner_limits;
 mod planner_supercool;
+mod planner_together;
 mod report_files;
 mod reproducible;
 mod restart;

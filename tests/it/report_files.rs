@@ -174,6 +174,7 @@ fn fixture() -> Plan {
             supercool: Some(SupercoolOption {
                 delta_c: 1.25,
                 aperture_mm: 0.62,
+                together: None,
             }),
             delay: Some(DelayOption {
                 days: 20,
