@@ -41,7 +41,8 @@ const VERIFIED: &str = "verified";
 /// into the wrong fields. Bump it with any change of a type they hold.
 /// 2: cooling stages with water changes, warnings in the thermal state.
 /// 3: the remedy search kept (`search.bin`, `verified/`), `PlanStats::reused`.
-const FORMAT: u32 = 3;
+/// 4: `SupercoolOption::together` (neighbours supercooled together).
+const FORMAT: u32 = 4;
 
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.
