@@ -58,8 +58,9 @@
 pub mod arch;
 pub mod blocks;
 pub mod geometry;
-pub mod import;
 mod grid;
+pub mod import;
+pub mod quality;
 pub mod vtu;
 
 use std::collections::{BTreeMap, HashMap};

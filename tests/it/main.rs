@@ -23,6 +23,7 @@ mod joint_two_blocks;
 mod material_creep;
 mod material_laws;
 mod mechanics_staged;
+mod mesh_files;
 mod mesh_generators;
 mod out_safety;
 mod planner_limits;
