@@ -743,10 +743,9 @@ fn bbox<'a>(raw: &RawMesh, nodes: impl Iterator<Item = &'a u32>) -> [f64; 6] {
         f64::NEG_INFINITY,
     ];
     for &n in nodes {
-        let p = raw.nodes[n as usize];
-        for k in 0..3 {
-            b[k] = b[k].min(p[k]);
-            b[k + 3] = b[k + 3].max(p[k]);
+        for (k, &v) in raw.nodes[n as usize].iter().enumerate() {
+            b[k] = b[k].min(v);
+            b[k + 3] = b[k + 3].max(v);
         }
     }
     b
