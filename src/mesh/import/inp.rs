@@ -416,29 +416,16 @@ impl Reader<'_> {
             }
         }
         match &rec.kind {
-            ElemKind::Hex => {
-                self.b.hex(id, std::array::from_fn(|k| nodes[k]), at)?;
-                if let Some(set) = rec.elset {
-                    self.b
-                        .element_groups
-                        .entry(set)
-                        .or_default()
-                        .members
-                        .push((id, at));
-                }
+            ElemKind::Hex => self.b.hex(id, std::array::from_fn(|k| nodes[k]), at)?,
+            ElemKind::Unsupported(one, many, _) => {
+                self.unsupported.add(one, many, &rec.ty, 1, at);
+                return Ok(());
             }
-            ElemKind::Unsupported(one, many, _) => self.unsupported.add(one, many, &rec.ty, 1, at),
-            ElemKind::Ignored => {
-                self.b.ignored_elements.insert(id, nodes);
-                if let Some(set) = rec.elset {
-                    self.b
-                        .element_groups
-                        .entry(set)
-                        .or_default()
-                        .members
-                        .push((id, at));
-                }
-            }
+            ElemKind::Ignored => drop(self.b.ignored_elements.insert(id, nodes)),
+        }
+        if let Some(set) = rec.elset {
+            let group = self.b.element_groups.entry(set).or_default();
+            group.members.push((id, at));
         }
         Ok(())
     }
