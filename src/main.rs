@@ -62,6 +62,15 @@ enum Command {
         #[command(subcommand)]
         what: StudyCommand,
     },
+    /// Build a scene's mesh, write it for ParaView, Gmsh or Abaqus/CalculiX,
+    /// and print its size and element quality.
+    Mesh {
+        /// Scene file (default: the bundled demo arch dam, models/demo_arch.toml).
+        scene: Option<PathBuf>,
+        /// File to write: .vtu (ParaView), .msh (Gmsh MSH 4.1) or .inp (Abaqus/CalculiX).
+        #[arg(long, value_parser = parse_mesh_out)]
+        out: PathBuf,
+    },
     /// Schedule tools.
     Schedule {
         #[command(subcommand)]
@@ -182,6 +191,17 @@ fn parse_date(s: &str) -> Result<chrono::NaiveDate, String> {
         .map_err(|_| format!("expected a date YYYY-MM-DD, found {s:?}"))
 }
 
+fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match app::mesh_export::MeshOut::of(&path) {
+        Some(_) => Ok(path),
+        None => Err(format!(
+            "expected a file ending in {}, found {s:?}",
+            app::mesh_export::MeshOut::EXPECTED
+        )),
+    }
+}
+
 /// Exit code of a plan with `--fail-on-flag` and a zone not groutable.
 const EXIT_FLAGGED: u8 = 3;
 
@@ -251,6 +271,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Schedule {
             what: ScheduleCommand::Synth { scene, out, force },
         } => schedule_synth(&scene, &out, force),
+        Command::Mesh { scene, out } => mesh(scene, &out),
     }
 }
 
@@ -404,6 +425,16 @@ fn prepare_out(out: &Path, inputs: &app::Inputs, force: bool) -> anyhow::Result<
         eprintln!("note: {note}");
     }
     Ok(dir)
+}
+
+/// `groutready mesh`: build, write and summarise a scene's mesh.
+fn mesh(scene: Option<PathBuf>, out: &Path) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    let summary = app::mesh_export::mesh(&scene, out)?;
+    println!("mesh of {}", scene.display());
+    print!("{summary}");
+    println!("wrote {}", out.display());
+    Ok(0)
 }
 
 /// `groutready schedule synth`: write a plausible schedule set for a scene.

@@ -2,6 +2,7 @@
 //! check where the run folder goes ([`out::OutDir`]), only then simulate,
 //! and write the run folder atomically.
 
+pub mod mesh_export;
 pub mod out;
 pub mod plan;
 pub mod restart;

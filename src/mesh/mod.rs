@@ -63,6 +63,7 @@ pub mod blocks;
 pub mod geometry;
 mod grid;
 pub mod import;
+pub mod quality;
 pub mod vtu;
 
 use std::collections::{BTreeMap, HashMap};

@@ -24,6 +24,7 @@ mod joint_two_blocks;
 mod material_creep;
 mod material_laws;
 mod mechanics_staged;
+mod mesh_files;
 mod mesh_generators;
 mod mesh_import;
 mod out_safety;

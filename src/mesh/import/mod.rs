@@ -24,8 +24,13 @@
 //!   corners do).
 
 pub mod dam;
+pub mod file;
 pub mod inp;
 pub mod msh;
+
+pub use file::{read_file, write_file, MeshFileError, MeshFormat};
+pub use inp::{read_inp, write_inp};
+pub use msh::{read_msh, write_msh, write_msh_binary};
 
 use std::collections::BTreeMap;
 
