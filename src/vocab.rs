@@ -227,3 +227,15 @@ impl Invalid {
         }
     }
 }
+
+/// FNV-1a, 64 bits: the one stable digest (unlike the std hasher, the same
+/// across Rust versions and processes) of restart fingerprints, the remedy
+/// memo's keys and mesh files.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}

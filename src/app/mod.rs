@@ -32,8 +32,12 @@ pub enum AppError {
     /// A `kind = "mesh"` scene's mesh file does not make a dam (the message names the file).
     #[error(transparent)]
     DamMesh(#[from] crate::mesh::import::dam::DamMeshError),
-    #[error("{path}: {message}")]
-    MeshFile { path: String, message: String },
+    /// A `kind = "mesh"` scene's mesh file cannot be read (the message names the file and line).
+    #[error(transparent)]
+    MeshFile(#[from] crate::mesh::import::MeshFileError),
+    /// The mesh file differs from the one the scene (or run folder) was made with.
+    #[error("{0}: the mesh file has changed since the scene was loaded (plan again with the new file)")]
+    MeshChanged(String),
     #[error("{0}: no schedules folder: give --schedules DIR or set `schedules` in the scene")]
     NoSchedules(String),
     #[error(transparent)]
@@ -80,8 +84,14 @@ pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
         Geometry::Arch(g) => mesh::generate_arch(g, lift, zone),
         Geometry::ArchTable(g) => mesh::generate_arch_table(g, lift, zone),
         Geometry::Mesh(g) => {
-            let dir = Path::new(origin).parent().unwrap_or_else(|| Path::new(""));
-            return load_mesh_file(&dir.join(&g.file), lift, zone);
+            let path = match &g.resolved {
+                Some(r) => PathBuf::from(&r.path),
+                None => Path::new(origin)
+                    .parent()
+                    .unwrap_or_else(|| Path::new(""))
+                    .join(&g.file),
+            };
+            return load_mesh_file(&path, g.resolved.as_ref().map(|r| r.digest), lift, zone);
         }
     };
     mesh.map_err(|source| AppError::Mesh {
@@ -91,17 +101,21 @@ pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
 }
 
 /// The dam of a `kind = "mesh"` scene from its file (resolved against the
-/// scene's folder by the caller).
-fn load_mesh_file(path: &Path, lift: f64, zone: f64) -> Result<Mesh, AppError> {
-    // Merge note: the readers (src/mesh/import/msh.rs, inp.rs) are on another
-    // branch; once merged this body is
-    // `let raw = mesh::import::read_file(path)?; Ok(mesh::import::dam::build(&raw, lift, zone)?)`
-    // (with an AppError variant for their MeshFileError).
-    let _ = (lift, zone, mesh::import::dam::build);
-    Err(AppError::MeshFile {
-        path: path.display().to_string(),
-        message: "reading mesh files is not in this build yet".to_string(),
-    })
+/// scene's folder by the caller): what the file says, then the dam's rules.
+fn load_mesh_file(
+    path: &Path,
+    digest: Option<u64>,
+    lift: f64,
+    zone: f64,
+) -> Result<Mesh, AppError> {
+    if let Some(digest) = digest {
+        let bytes = std::fs::read(path).map_err(io_err(path))?;
+        if crate::vocab::fnv1a(&bytes) != digest {
+            return Err(AppError::MeshChanged(path.display().to_string()));
+        }
+    }
+    let raw = mesh::import::read_file(path)?;
+    Ok(mesh::import::dam::build(&raw, lift, zone)?)
 }
 
 pub use crate::sim::dam_layout;

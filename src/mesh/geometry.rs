@@ -22,6 +22,35 @@ pub enum Geometry {
 pub struct MeshGeometry {
     /// The mesh file, relative to the scene file's folder.
     pub file: String,
+    /// Set by `Scene::load`, never written by hand: where the file is and a
+    /// digest of its bytes. A run folder's copy of the scene then finds the
+    /// same file from anywhere (the TUI opens run folders), and the restart
+    /// fingerprint, which hashes the scene, changes when the file does.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolved: Option<ResolvedFile>,
+}
+
+/// A mesh file found on disk when its scene was loaded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResolvedFile {
+    /// The absolute path.
+    pub path: String,
+    /// FNV-1a of the file's bytes ([`crate::vocab::fnv1a`]).
+    pub digest: u64,
+}
+
+impl MeshGeometry {
+    /// Finds `file` relative to `dir` (the scene file's folder) and digests it.
+    pub fn resolve(&mut self, dir: &std::path::Path) -> std::io::Result<()> {
+        let path = std::path::absolute(dir.join(&self.file))?;
+        let bytes = std::fs::read(&path)?;
+        self.resolved = Some(ResolvedFile {
+            path: path.display().to_string(),
+            digest: crate::vocab::fnv1a(&bytes),
+        });
+        Ok(())
+    }
 }
 
 /// N rectangular blocks in a row along x on a rock foundation.

@@ -91,15 +91,7 @@ pub fn digest<T: Serialize>(value: &T) -> u64 {
     fnv1a(&postcard::to_allocvec(value).unwrap_or_default())
 }
 
-/// FNV-1a, 64 bits.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
-}
+pub use crate::vocab::fnv1a;
 
 #[cfg(test)]
 mod tests {

@@ -543,11 +543,22 @@ impl Scene {
 
     /// Reads the CSV tables of an `arch_table` geometry, relative to the
     /// folder of the scene file at `scene_path`, into the geometry (so a
-    /// scene kept as JSON carries them); nothing to do for other kinds.
+    /// scene kept as JSON carries them), and finds a `mesh` geometry's file
+    /// there ([`crate::mesh::geometry::MeshGeometry::resolve`]); nothing to
+    /// do for the generators.
     pub fn read_geometry_tables(&mut self, scene_path: &Path) -> Result<(), SceneError> {
-        if let Geometry::ArchTable(g) = &mut self.geometry {
-            let dir = scene_path.parent().unwrap_or_else(|| Path::new(""));
-            g.tables = Some(crate::mesh::arch_table::load_tables(g, dir)?);
+        let dir = scene_path.parent().unwrap_or_else(|| Path::new(""));
+        match &mut self.geometry {
+            Geometry::ArchTable(g) => {
+                g.tables = Some(crate::mesh::arch_table::load_tables(g, dir)?);
+            }
+            Geometry::Mesh(g) => {
+                g.resolve(dir).map_err(|source| SceneError::Io {
+                    path: dir.join(&g.file),
+                    source,
+                })?;
+            }
+            Geometry::Blocks(_) | Geometry::Arch(_) => {}
         }
         Ok(())
     }

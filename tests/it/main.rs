@@ -27,6 +27,7 @@ mod mechanics_staged;
 mod mesh_files;
 mod mesh_generators;
 mod mesh_import;
+mod mesh_scenes;
 mod out_safety;
 mod planner_limits;
 mod planner_supercool;

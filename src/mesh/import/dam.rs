@@ -286,7 +286,10 @@ fn number(s: &str) -> Option<u32> {
     s.parse().ok().filter(|&n| n >= 1)
 }
 
+/// The part a group names; the names match in any case, since Abaqus
+/// tools write set names in capitals (`BLOCK_1`, `ROCK`).
 fn group_kind(name: &str) -> Option<Group> {
+    let name = name.to_ascii_lowercase();
     if name == "rock" {
         return Some(Group::Rock);
     }
@@ -1480,9 +1483,14 @@ impl<'a> Dam<'a> {
             .collect()
     }
 
-    /// Points in node group `name` (a point is in it when one of its file nodes is).
+    /// Points in node group `name`, in any case (a point is in it when one
+    /// of its file nodes is).
     fn group_points(&self, name: &str) -> Option<Vec<bool>> {
-        let nodes = self.raw.node_groups.get(name)?;
+        let (_, nodes) = self
+            .raw
+            .node_groups
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case(name))?;
         let mut set = vec![false; self.class_node.len()];
         for &n in nodes {
             if let Some(&c) = self.class.get(n as usize).filter(|&&c| c != NONE) {
