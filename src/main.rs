@@ -125,9 +125,11 @@ enum StudyCommand {
         /// Judge only the zones planned within this many days of the epoch.
         #[arg(long)]
         horizon_days: Option<i64>,
-        /// The scene as given, steps ×2 and the reference only.
+        /// Only the scene as given and the presets, against a reference on
+        /// the scene's own mesh (steps ×1/4, consistent capacity): for
+        /// scenes too large for the mesh knobs.
         #[arg(long)]
-        quick: bool,
+        presets_only: bool,
     },
     /// Weekly update: a plan from scratch, the same plan restarted from its
     /// run folder, and the plan after a schedule edit, timed (written to a
@@ -252,9 +254,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     scene,
                     out,
                     horizon_days,
-                    quick,
+                    presets_only,
                 },
-        } => study_accuracy(scene, out, horizon_days, quick),
+        } => study_accuracy(scene, out, horizon_days, presets_only),
         Command::Study {
             what:
                 StudyCommand::Perf {
@@ -398,14 +400,14 @@ fn study_accuracy(
     scene: Option<PathBuf>,
     out: Option<PathBuf>,
     horizon_days: Option<i64>,
-    quick: bool,
+    presets_only: bool,
 ) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/small_dam_joints.toml"));
     let out = out.unwrap_or_else(|| {
         let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from("runs").join(format!("{stem}_accuracy"))
     });
-    let table = groutready::study::accuracy::accuracy(&scene, &out, horizon_days, quick, &mut |l| {
+    let table = groutready::study::accuracy::accuracy(&scene, &out, horizon_days, presets_only, &mut |l| {
         eprintln!("{l}")
     })?;
     print!("{}", groutready::study::accuracy::markdown(&table));
