@@ -407,9 +407,13 @@ fn study_accuracy(
         let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from("runs").join(format!("{stem}_accuracy"))
     });
-    let table = groutready::study::accuracy::accuracy(&scene, &out, horizon_days, presets_only, &mut |l| {
-        eprintln!("{l}")
-    })?;
+    let table = groutready::study::accuracy::accuracy(
+        &scene,
+        &out,
+        horizon_days,
+        presets_only,
+        &mut |l| eprintln!("{l}"),
+    )?;
     print!("{}", groutready::study::accuracy::markdown(&table));
     println!("wrote {}", out.display());
     Ok(0)

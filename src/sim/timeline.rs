@@ -122,9 +122,7 @@ impl Ladder {
 
     /// Length of the next step from `day` given the next event.
     pub fn next_step(&self, cfg: &TimeStepping, day: f64, next_event: f64) -> f64 {
-        let nominal = cfg
-            .scheduled_step(day - self.since)
-            .unwrap_or(self.nominal);
+        let nominal = cfg.scheduled_step(day - self.since).unwrap_or(self.nominal);
         let mut dt = nominal.min(next_event - day);
         if day.fract() != 0.0 {
             dt = dt.min(day.ceil() - day);
@@ -251,7 +249,10 @@ mod tests {
             } else {
                 1.0
             };
-            assert!((dt - want).abs() < 1e-9, "step from day {d} is {dt}, expected {want}");
+            assert!(
+                (dt - want).abs() < 1e-9,
+                "step from day {d} is {dt}, expected {want}"
+            );
         }
     }
 }

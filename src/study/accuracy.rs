@@ -220,7 +220,8 @@ fn run_setting(
 
 /// Fills the error columns of `row` from its samples against `reference`'s.
 fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneId, Sample>) {
-    let (mut max, mut sq, mut n, mut points, mut temps, mut differ) = (0.0f64, 0.0, 0, 0.0f64, 0.0f64, 0);
+    let (mut max, mut sq, mut n, mut points, mut temps, mut differ) =
+        (0.0f64, 0.0, 0, 0.0f64, 0.0f64, 0);
     for (id, r) in reference {
         let Some(s) = a.get(id) else {
             differ += 1;
@@ -384,7 +385,11 @@ fn chains_and_estimate(
             .windows(2)
             .map(|w| (w[0].0, largest_difference(&w[0].1.samples, &w[1].1.samples)))
             .unzip();
-        let fitted = if ds.len() >= 2 { fit_rate(&hs, &ds) } else { None };
+        let fitted = if ds.len() >= 2 {
+            fit_rate(&hs, &ds)
+        } else {
+            None
+        };
         rates.insert(knob.to_string(), fitted);
         let [.., (h2, coarse), (h1, fine)] = chain[..] else {
             continue;
@@ -401,7 +406,11 @@ fn chains_and_estimate(
             "{knob}: {:.3} mm (p = {}{}, h {} → {}{})",
             rich + gap,
             crate::report::svg::num(p, 2),
-            if fitted.is_some() { " fitted" } else { " assumed" },
+            if fitted.is_some() {
+                " fitted"
+            } else {
+                " assumed"
+            },
             crate::report::svg::num(h2, 3),
             crate::report::svg::num(h1, 3),
             if gap > 0.0 {
@@ -466,15 +475,25 @@ fn scale_steps(scene: &mut Scene, k: f64) {
 pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
     let mut l = vec![Setting::new("scene as given", SCENE, Some(1.0), |_| {})];
     for k in [2.0, 0.5, 0.25] {
-        l.push(Setting::new(format!("steps x{k}"), "steps", Some(k), move |s| {
-            scale_steps(s, k)
-        }));
+        l.push(Setting::new(
+            format!("steps x{k}"),
+            "steps",
+            Some(k),
+            move |s| scale_steps(s, k),
+        ));
     }
-    l.push(Setting::new("multi-rate 0.1/0.25/1 d", "multi-rate", None, multi_rate));
+    l.push(Setting::new(
+        "multi-rate 0.1/0.25/1 d",
+        "multi-rate",
+        None,
+        multi_rate,
+    ));
     l.push(Setting::new("consistent capacity", "capacity", None, |s| {
         s.time.capacity = CapacityKind::Consistent
     }));
-    l.push(Setting::new("theta 0.5", "theta", None, |s| s.time.theta = 0.5));
+    l.push(Setting::new("theta 0.5", "theta", None, |s| {
+        s.time.theta = 0.5
+    }));
     // The step's own residual check rejects anything above 1e-9.
     l.push(Setting::new("pcg 1e-10", "thermal solver", None, |s| {
         s.solver.thermal = ThermalSolverKind::Pcg;
@@ -506,9 +525,12 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         }));
     }
     for p in Preset::ALL {
-        l.push(Setting::new(format!("preset {}", p.name()), "preset", None, move |s| {
-            crate::scene::preset::apply(p, &mut s.time, &|_| false)
-        }));
+        l.push(Setting::new(
+            format!("preset {}", p.name()),
+            "preset",
+            None,
+            move |s| crate::scene::preset::apply(p, &mut s.time, &|_| false),
+        ));
     }
     let reference = Reference {
         setting: Setting::new("reference", REFERENCE, None, |s| {
@@ -613,26 +635,54 @@ pub fn chart(t: &AccuracyTable) -> String {
     use crate::report::svg::{self, num, Svg, FRAME, HEIGHT, WIDTH};
     let f = FRAME;
     let tmax = t.rows.iter().map(|r| r.seconds).fold(1e-3, f64::max);
-    let emax = t.rows.iter().map(|r| r.max_aperture_err_mm).fold(1e-3, f64::max);
+    let emax = t
+        .rows
+        .iter()
+        .map(|r| r.max_aperture_err_mm)
+        .fold(1e-3, f64::max);
     let (xt, yt) = (nice_ticks(0.0, tmax, 6), nice_ticks(0.0, emax, 5));
     let last = |v: &[f64]| v.last().copied().unwrap_or(1.0);
     let x = Scale::new((0.0, last(&xt)), (f.left, f.right));
     let y = Scale::new((0.0, last(&yt)), (f.bottom, f.top));
     let mut s = Svg::new(WIDTH, HEIGHT);
-    svg::title(&mut s, &format!("{}: deciding-aperture error against time", t.scene));
+    svg::title(
+        &mut s,
+        &format!("{}: deciding-aperture error against time", t.scene),
+    );
     s.open_group("axes");
-    for (&v, dec) in yt.iter().zip(std::iter::repeat(tick_decimals(yt.get(1).copied().unwrap_or(1.0)))) {
+    for (&v, dec) in yt.iter().zip(std::iter::repeat(tick_decimals(
+        yt.get(1).copied().unwrap_or(1.0),
+    ))) {
         s.line("grid", (f.left, y.map(v)), (f.right, y.map(v)));
-        s.text("tick-label", (f.left - 6.0, y.map(v) + 4.0), "end", &num(v, dec));
+        s.text(
+            "tick-label",
+            (f.left - 6.0, y.map(v) + 4.0),
+            "end",
+            &num(v, dec),
+        );
     }
     for &v in &xt {
         s.line("grid", (x.map(v), f.top), (x.map(v), f.bottom));
-        s.text("tick-label", (x.map(v), f.bottom + 16.0), "middle", &num(v, 1));
+        s.text(
+            "tick-label",
+            (x.map(v), f.bottom + 16.0),
+            "middle",
+            &num(v, 1),
+        );
     }
     s.line("axis", (f.left, f.bottom), (f.right, f.bottom));
     s.line("axis", (f.left, f.top), (f.left, f.bottom));
-    s.text("axis-title", ((f.left + f.right) / 2.0, f.bottom + 34.0), "middle", "wall time [s]");
-    s.vertical_text("axis-title", (16.0, (f.top + f.bottom) / 2.0), "largest deciding-aperture error [mm]");
+    s.text(
+        "axis-title",
+        ((f.left + f.right) / 2.0, f.bottom + 34.0),
+        "middle",
+        "wall time [s]",
+    );
+    s.vertical_text(
+        "axis-title",
+        (16.0, (f.top + f.bottom) / 2.0),
+        "largest deciding-aperture error [mm]",
+    );
     s.close_group();
     let mut front: Vec<(f64, f64)> = t
         .rows
@@ -648,38 +698,20 @@ pub fn chart(t: &AccuracyTable) -> String {
         s.circle(if r.pareto { "on-front" } else { "setting" }, c, 3.5);
         s.text("point-label", (c.0 + 6.0, c.1 - 4.0), "start", &r.name);
     }
-    svg::legend(&mut s, f, &[("on-front", "on the Pareto front", true), ("setting", "other settings", true)]);
+    svg::legend(
+        &mut s,
+        f,
+        &[
+            ("on-front", "on the Pareto front", true),
+            ("setting", "other settings", true),
+        ],
+    );
     let style = format!(
         "{}{}",
         svg::STYLE,
         ".front{stroke:#d62728;fill:none;stroke-width:1.5}.on-front{fill:#d62728}.setting{fill:#1f77b4}.point-label{fill:#333;font-size:10px}"
     );
     s.finish(&format!("{}: accuracy against time", t.scene), &style)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rate_of_a_second_order_sequence_is_two() {
-        let h = [1.0, 0.5, 0.25, 0.125];
-        let e: Vec<f64> = h.iter().map(|h| 3.7 * h * h).collect();
-        let p = fit_rate(&h, &e).unwrap();
-        assert!((p - 2.0).abs() < 1e-12, "p = {p}");
-        assert_eq!(fit_rate(&[1.0], &[2.0]), None);
-        assert_eq!(fit_rate(&[1.0, 1.0], &[2.0, 3.0]), None);
-    }
-
-    #[test]
-    fn front_of_a_hand_made_table() {
-        // (time, error): c is beaten by b (faster and more accurate), e ties
-        // a in time but is less accurate, d is the slowest but exact.
-        let pts = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (10.0, 0.0), (1.0, 0.6)];
-        assert_eq!(pareto_front(&pts), vec![true, true, false, true, false]);
-        // Two identical points are both on the front.
-        assert_eq!(pareto_front(&[(1.0, 1.0), (1.0, 1.0)]), vec![true, true]);
-    }
 }
 
 /// The default ladder of the scene at `scene_path` (or, with
@@ -713,5 +745,30 @@ pub fn time_reference() -> Reference {
             s.time.capacity = CapacityKind::Consistent;
         }),
         levels: vec![("steps".into(), 0.25)],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rate_of_a_second_order_sequence_is_two() {
+        let h = [1.0, 0.5, 0.25, 0.125];
+        let e: Vec<f64> = h.iter().map(|h| 3.7 * h * h).collect();
+        let p = fit_rate(&h, &e).unwrap();
+        assert!((p - 2.0).abs() < 1e-12, "p = {p}");
+        assert_eq!(fit_rate(&[1.0], &[2.0]), None);
+        assert_eq!(fit_rate(&[1.0, 1.0], &[2.0, 3.0]), None);
+    }
+
+    #[test]
+    fn front_of_a_hand_made_table() {
+        // (time, error): c is beaten by b (faster and more accurate), e ties
+        // a in time but is less accurate, d is the slowest but exact.
+        let pts = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (10.0, 0.0), (1.0, 0.6)];
+        assert_eq!(pareto_front(&pts), vec![true, true, false, true, false]);
+        // Two identical points are both on the front.
+        assert_eq!(pareto_front(&[(1.0, 1.0), (1.0, 1.0)]), vec![true, true]);
     }
 }

@@ -105,7 +105,9 @@ fn bad_step_schedule_names_the_key_and_line() {
         "[time]\n",
         "[time]\nstep_schedule = [{ step_days = 0.1, until_days = 2 }, { step_days = 0.25, until_days = 1 }]\n",
     );
-    let e = Scene::from_toml_str(&text, "small.toml").unwrap_err().to_string();
+    let e = Scene::from_toml_str(&text, "small.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("small.toml"), "{e}");
     assert!(e.contains("time.step_schedule entry 2"), "{e}");
     assert!(e.contains("until_days > 2"), "{e}");
