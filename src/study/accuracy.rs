@@ -420,6 +420,9 @@ fn chains_and_estimate(
             }
         ));
     }
+    if notes.is_empty() {
+        notes.push("not estimated: no knob was refined in two levels".into());
+    }
     (rates, notes.join("; "), total)
 }
 
