@@ -16,7 +16,8 @@
 //! differences, not the errors against the reference: those carry the
 //! other knobs' error as an offset). The reference's own error is estimated
 //! per knob by Richardson from the knob's two finest levels,
-//! |a_fine − a_coarse| / (r^p − 1) with r their ratio of h, plus the
+//! |a_fine − a_coarse| / (r^p − 1) with r their ratio of h (p = 1 where
+//! no rate was fitted or the fitted one is below 0.5), plus the
 //! difference between the knob's finest level and the reference's level of
 //! it where the reference does not refine it; the knobs' estimates are
 //! added (their errors assumed independent). The Pareto front (no other
@@ -394,7 +395,10 @@ fn chains_and_estimate(
         let [.., (h2, coarse), (h1, fine)] = chain[..] else {
             continue;
         };
-        let p = fitted.filter(|p| *p > 0.1).unwrap_or(1.0);
+        // A fitted p below 0.5 says the levels are not yet in the
+        // asymptotic range; dividing by 2^p − 1 ≈ 0 would blow the
+        // estimate up, so first order is assumed there.
+        let p = fitted.filter(|p| *p >= 0.5).unwrap_or(1.0);
         let rich = largest_difference(&fine.samples, &coarse.samples) / ((h2 / h1).powf(p) - 1.0);
         let ref_h = levels.iter().find(|l| l.0 == knob).map_or(1.0, |l| l.1);
         let gap = chain
@@ -406,10 +410,10 @@ fn chains_and_estimate(
             "{knob}: {:.3} mm (p = {}{}, h {} → {}{})",
             rich + gap,
             crate::report::svg::num(p, 2),
-            if fitted.is_some() {
-                " fitted"
-            } else {
-                " assumed"
+            match fitted {
+                Some(f) if f >= 0.5 => " fitted".to_string(),
+                Some(f) => format!(" assumed: the fitted {f:.2} is not asymptotic"),
+                None => " assumed".to_string(),
             },
             crate::report::svg::num(h2, 3),
             crate::report::svg::num(h1, 3),
