@@ -121,6 +121,25 @@ impl PlanArgs {
 
 #[derive(Subcommand)]
 enum StudyCommand {
+    /// A ladder of discretisations and solver settings against a reference
+    /// run: deciding-aperture and temperature errors at every zone's planned
+    /// date, verdicts that differ, and the time each cost (accuracy.csv,
+    /// accuracy.md, accuracy.svg).
+    Accuracy {
+        /// Scene (default: models/small_dam_joints.toml).
+        scene: Option<PathBuf>,
+        /// Folder to write (default: runs/<scene stem>_accuracy).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Judge only the zones planned within this many days of the epoch.
+        #[arg(long)]
+        horizon_days: Option<i64>,
+        /// Only the scene as given and the presets, against a reference on
+        /// the scene's own mesh (steps ×1/4, consistent capacity): for
+        /// scenes too large for the mesh knobs.
+        #[arg(long)]
+        presets_only: bool,
+    },
     /// Weekly update: a plan from scratch, the same plan restarted from its
     /// run folder, and the plan after a schedule edit, timed (written to a
     /// scratch folder under the system's temp dir, removed at the end).
@@ -249,6 +268,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Study {
             what: StudyCommand::Restart { scene },
         } => study_restart(scene),
+        Command::Study {
+            what:
+                StudyCommand::Accuracy {
+                    scene,
+                    out,
+                    horizon_days,
+                    presets_only,
+                },
+        } => study_accuracy(scene, out, horizon_days, presets_only),
         Command::Study {
             what:
                 StudyCommand::Perf {
@@ -385,6 +413,30 @@ fn print_plan(summary: &app::plan::PlanSummary) {
 fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     groutready::study::restart::restart(&scene)?;
+    Ok(0)
+}
+
+/// `groutready study accuracy`: the ladder against its reference.
+fn study_accuracy(
+    scene: Option<PathBuf>,
+    out: Option<PathBuf>,
+    horizon_days: Option<i64>,
+    presets_only: bool,
+) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/small_dam_joints.toml"));
+    let out = out.unwrap_or_else(|| {
+        let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+        PathBuf::from("runs").join(format!("{stem}_accuracy"))
+    });
+    let table = groutready::study::accuracy::accuracy(
+        &scene,
+        &out,
+        horizon_days,
+        presets_only,
+        &mut |l| eprintln!("{l}"),
+    )?;
+    print!("{}", groutready::study::accuracy::markdown(&table));
+    println!("wrote {}", out.display());
     Ok(0)
 }
 

@@ -35,6 +35,7 @@
 
 mod error;
 mod planner;
+pub mod preset;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -48,6 +49,7 @@ use crate::vocab::{Epoch, Invalid};
 
 pub use error::SceneError;
 pub use planner::PlannerSettings;
+pub use preset::Preset;
 
 /// Seconds per day: heat flows in W are turned into J/day with this factor.
 pub const SECONDS_PER_DAY: f64 = 86_400.0;
@@ -321,6 +323,12 @@ pub struct TimeStepping {
     pub growth: f64,
     /// Longest step \[d\], default 4.
     pub max_step_days: f64,
+    /// Explicit multi-rate steps after each pour or stage change, e.g.
+    /// `[{ step_days = 0.1, until_days = 2 }, { step_days = 0.25, until_days = 7 }]`:
+    /// 0.1 d steps for the first 2 days, then 0.25 d to day 7; past the last
+    /// entry the ladder's own step (`first_step_days` grown since the pour,
+    /// at most `max_step_days`). Default none (the ladder alone).
+    pub step_schedule: Vec<ScheduledStep>,
     /// θ of the θ-method: 1 = backward Euler (default), 0.5 = Crank–Nicolson.
     pub theta: f64,
     /// Capacity matrix, `lumped` (default) or `consistent`.
@@ -345,11 +353,36 @@ impl Default for TimeStepping {
             first_step_days: 0.25,
             growth: 2.0,
             max_step_days: 4.0,
+            step_schedule: Vec::new(),
             theta: 1.0,
             capacity: CapacityKind::Lumped,
             mechanics_max_step_days: 1,
             end_date: None,
         }
+    }
+}
+
+/// One rate of `time.step_schedule`: steps of `step_days` until
+/// `until_days` after the pour or stage change.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScheduledStep {
+    /// Step length \[d\] (> 0).
+    pub step_days: f64,
+    /// Days after the pour this rate ends (increasing along the list).
+    pub until_days: f64,
+}
+
+impl TimeStepping {
+    /// The scheduled step `elapsed` days after the last pour or stage
+    /// change, cut at the end of its rate; None past the schedule.
+    pub fn scheduled_step(&self, elapsed: f64) -> Option<f64> {
+        // 1e-9: a step that ends within round-off of a rate's end is past it.
+        let rate = self
+            .step_schedule
+            .iter()
+            .find(|r| elapsed < r.until_days - 1e-9)?;
+        Some(rate.step_days.min(rate.until_days - elapsed))
     }
 }
 
@@ -385,6 +418,10 @@ pub enum ContactSolverKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSettings {
+    /// `fast`, `standard` or `reference`: the `[time]` keys of that
+    /// accuracy level ([`preset`]); keys written in `[time]` override it.
+    /// Default none (each key its own default, the same as `standard`).
+    pub preset: Option<Preset>,
     /// `cholesky` (default) or `pcg`.
     pub thermal: ThermalSolverKind,
     /// PCG stops at ‖r‖ ≤ tol·‖b‖; default 1e-12, at most 1e-6.
@@ -427,6 +464,7 @@ pub enum OrderingKind {
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
+            preset: None,
             thermal: ThermalSolverKind::Cholesky,
             pcg_tolerance: 1e-12,
             pcg_max_iterations: 2000,
@@ -566,8 +604,16 @@ impl Scene {
     /// Parse and validate scene text; `origin` names it in error messages
     /// (usually the file name, e.g. `models/demo_arch.toml`).
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene =
+        let mut scene: Scene =
             toml::from_str(text).map_err(|e| error::from_toml_error(text, origin, e))?;
+        if let Some(p) = scene.solver.preset {
+            // The text parsed above, so it parses as a table too.
+            let table: toml::Table = toml::from_str(text).unwrap_or_default();
+            let time = table.get("time").and_then(|t| t.as_table());
+            preset::apply(p, &mut scene.time, &|k| {
+                time.is_some_and(|t| t.contains_key(k))
+            });
+        }
         scene
             .validate()
             .map_err(|e| e.with_origin(origin).located(text))?;

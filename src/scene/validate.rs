@@ -210,6 +210,7 @@ fn time(t: &TimeStepping, s: &Scene) -> Check {
             ),
         ));
     }
+    step_schedule(t)?;
     if !(1..=30).contains(&t.mechanics_max_step_days) {
         return Err(SceneError::invalid(
             "time.mechanics_max_step_days",
@@ -232,6 +233,30 @@ fn time(t: &TimeStepping, s: &Scene) -> Check {
                 format!("time.end_date = {end} must be after epoch {}", s.epoch),
             ));
         }
+    }
+    Ok(())
+}
+
+/// Positive steps, each rate ending after the one before it.
+fn step_schedule(t: &TimeStepping) -> Check {
+    let mut last = 0.0;
+    for (i, r) in t.step_schedule.iter().enumerate() {
+        let ok = r.step_days.is_finite()
+            && r.step_days > 0.0
+            && r.until_days.is_finite()
+            && r.until_days > last;
+        if !ok {
+            return Err(SceneError::invalid(
+                "time.step_schedule",
+                format!(
+                    "time.step_schedule entry {}: expected step_days > 0 and until_days > {last} (the entry before ends there), got step_days = {}, until_days = {}",
+                    i + 1,
+                    r.step_days,
+                    r.until_days
+                ),
+            ));
+        }
+        last = r.until_days;
     }
     Ok(())
 }

@@ -303,7 +303,7 @@ impl<'a> Simulation<'a> {
             restart |= th.update_stages(self.day);
         }
         if restart {
-            self.ladder.restart(&self.scene.time);
+            self.ladder.restart(&self.scene.time, self.day);
         }
         if let (true, Some(sink)) = (snapshot, sink) {
             let snap = self.snapshot();
@@ -340,7 +340,7 @@ impl<'a> Simulation<'a> {
                 return Err(SimError::Cancelled(self.scene.epoch.date_at(self.day)));
             }
             let next = self.timeline.next_event_after(self.day);
-            let dt = self.ladder.next_step(self.day, next);
+            let dt = self.ladder.next_step(&self.scene.time, self.day, next);
             let t1 = snap(self.day + dt);
             if let Some(th) = self.thermal.as_mut() {
                 if let Err(source) = th.step(self.day, t1) {

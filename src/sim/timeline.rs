@@ -96,26 +96,34 @@ impl Timeline {
     }
 }
 
-/// The step ladder state: the nominal step grows between events.
+/// The step ladder state: the nominal step grows between events; an
+/// explicit `step_schedule` overrides it for its days after a restart.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ladder {
     pub nominal: f64,
+    /// time of the last restart (pour or stage change) [d]; the schedule
+    /// counts from it
+    pub since: f64,
 }
 
 impl Ladder {
     pub fn new(cfg: &TimeStepping) -> Ladder {
         Ladder {
             nominal: cfg.max_step_days,
+            // Before any pour nothing is scheduled.
+            since: f64::NEG_INFINITY,
         }
     }
 
-    pub fn restart(&mut self, cfg: &TimeStepping) {
+    pub fn restart(&mut self, cfg: &TimeStepping, day: f64) {
         self.nominal = cfg.first_step_days;
+        self.since = day;
     }
 
     /// Length of the next step from `day` given the next event.
-    pub fn next_step(&self, day: f64, next_event: f64) -> f64 {
-        let mut dt = self.nominal.min(next_event - day);
+    pub fn next_step(&self, cfg: &TimeStepping, day: f64, next_event: f64) -> f64 {
+        let nominal = cfg.scheduled_step(day - self.since).unwrap_or(self.nominal);
+        let mut dt = nominal.min(next_event - day);
         if day.fract() != 0.0 {
             dt = dt.min(day.ceil() - day);
         }
@@ -165,12 +173,12 @@ mod tests {
         let mut ladder = Ladder::new(&cfg);
         let mut day = 0.0;
         let mut ends = vec![];
-        ladder.restart(&cfg);
+        ladder.restart(&cfg, 0.0);
         while day < 30.0 {
             if tl.at(day).is_some() && day > 0.0 {
-                ladder.restart(&cfg);
+                ladder.restart(&cfg, day);
             }
-            let dt = ladder.next_step(day, tl.next_event_after(day));
+            let dt = ladder.next_step(&cfg, day, tl.next_event_after(day));
             day = snap(day + dt);
             ends.push(day);
             ladder.grow(&cfg);
@@ -197,6 +205,54 @@ mod tests {
                 );
             }
             prev = e;
+        }
+    }
+
+    /// 0.1 d for 2 days, 0.25 d to day 7, then the ladder (capped at 1 d):
+    /// 20 + 20 + 23 steps to day 30, every one of the scheduled length.
+    #[test]
+    fn step_schedule_sets_the_steps_after_a_pour() {
+        use crate::scene::ScheduledStep;
+        let cfg = TimeStepping {
+            max_step_days: 1.0,
+            step_schedule: vec![
+                ScheduledStep {
+                    step_days: 0.1,
+                    until_days: 2.0,
+                },
+                ScheduledStep {
+                    step_days: 0.25,
+                    until_days: 7.0,
+                },
+            ],
+            ..TimeStepping::default()
+        };
+        let tl = Timeline {
+            end_day: Day(30),
+            ..Default::default()
+        };
+        let mut ladder = Ladder::new(&cfg);
+        ladder.restart(&cfg, 0.0);
+        let (mut day, mut steps) = (0.0, vec![]);
+        while day < 30.0 {
+            let dt = ladder.next_step(&cfg, day, tl.next_event_after(day));
+            steps.push((day, dt));
+            day = snap(day + dt);
+            ladder.grow(&cfg);
+        }
+        assert_eq!(steps.len(), 20 + 20 + 23);
+        for &(d, dt) in &steps {
+            let want = if d < 2.0 - 1e-9 {
+                0.1
+            } else if d < 7.0 - 1e-9 {
+                0.25
+            } else {
+                1.0
+            };
+            assert!(
+                (dt - want).abs() < 1e-9,
+                "step from day {d} is {dt}, expected {want}"
+            );
         }
     }
 }

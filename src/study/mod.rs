@@ -1,6 +1,7 @@
 //! Benchmarks and studies: what accuracy costs in time. Figures are printed,
 //! never asserted.
 
+pub mod accuracy;
 pub mod restart;
 
 use std::path::{Path, PathBuf};

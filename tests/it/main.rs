@@ -37,6 +37,7 @@ mod reproducible;
 mod restart;
 mod scene_errors;
 mod schedule_errors;
+mod study_accuracy;
 mod thermal_closed_forms;
 mod tui_screens;
 mod tui_tmux;

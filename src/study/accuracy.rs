@@ -1,0 +1,781 @@
+//! What accuracy costs in time: `groutready study accuracy`.
+//!
+//! A ladder of settings of one scene (discretisation and solver knobs, each
+//! varied alone from the scene as given, the presets, and a reference: the
+//! finest affordable run) is simulated to the last zone's planned date.
+//! Every zone is judged on its planned date by the planner's own rules
+//! ([`Rules::evaluate`]), and each setting is compared with the reference
+//! at the zone points (upstream, centre, downstream, minimum), which every
+//! mesh of the same geometry has: the largest and RMS error of the deciding
+//! aperture, the largest error of the two blocks' zone temperatures, the
+//! zones whose verdict differs, against the dofs and wall time it cost.
+//!
+//! A knob refined geometrically (steps scaled by 2, elements doubled) gets a
+//! convergence rate p fitted by least squares to log d against log h, d the
+//! largest deciding-aperture difference between successive levels (the
+//! differences, not the errors against the reference: those carry the
+//! other knobs' error as an offset). The reference's own error is estimated
+//! per knob by Richardson from the knob's two finest levels,
+//! |a_fine − a_coarse| / (r^p − 1) with r their ratio of h (p = 1 where
+//! no rate was fitted or the fitted one is below 0.5), plus the
+//! difference between the knob's finest level and the reference's level of
+//! it where the reference does not refine it; the knobs' estimates are
+//! added (their errors assumed independent). The Pareto front (no other
+//! setting both faster and more accurate) is marked in the table and chart.
+//!
+//! Verified by the unit tests below (front on a hand-made table, the rate
+//! of e = C·h² is 2 to 1e-12) and `tests/it/study_accuracy.rs` (a tiny
+//! ladder on the small dam: the reference's error is 0, a copy of the
+//! reference has error 0, a coarser setting does not, the files exist).
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use crate::app;
+use crate::mesh::geometry::Geometry;
+use crate::planner::rules::{HistoryIndex, Rules};
+use crate::planner::search::grout_days;
+use crate::planner::{Apertures, Verdict};
+use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, ThermalSolverKind};
+use crate::schedule::Schedules;
+use crate::sim::{dam_layout, Simulation};
+use crate::vocab::{Day, ZoneId};
+
+use super::StudyError;
+
+/// An edit of the scene a setting makes.
+pub type Edit = Box<dyn Fn(&mut Scene) + Send + Sync>;
+
+/// One setting of the ladder.
+pub struct Setting {
+    /// short name, unique in the ladder ("steps ×0.5", "reference")
+    pub name: String,
+    /// the knob varied from the scene as given: settings of one knob with
+    /// an `h` form its refinement chain; the scene as given is every
+    /// chain's h = 1 ([`SCENE`]), the reference is [`REFERENCE`]
+    pub knob: String,
+    /// the knob's refinement parameter relative to the scene's (smaller is
+    /// finer); None where the knob is not refined geometrically
+    pub h: Option<f64>,
+    pub edit: Edit,
+}
+
+/// Knob name of the scene as given.
+pub const SCENE: &str = "scene";
+/// Knob name of the reference.
+pub const REFERENCE: &str = "reference";
+
+impl Setting {
+    pub fn new(
+        name: impl Into<String>,
+        knob: impl Into<String>,
+        h: Option<f64>,
+        edit: impl Fn(&mut Scene) + Send + Sync + 'static,
+    ) -> Setting {
+        Setting {
+            name: name.into(),
+            knob: knob.into(),
+            h,
+            edit: Box::new(edit),
+        }
+    }
+}
+
+/// The reference: the finest setting, with its level of each refined knob
+/// (knobs not named are at the scene's level, h = 1).
+pub struct Reference {
+    pub setting: Setting,
+    pub levels: Vec<(String, f64)>,
+}
+
+/// One row of the accuracy table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub name: String,
+    pub knob: String,
+    pub h: Option<f64>,
+    pub elements: usize,
+    pub thermal_dofs: usize,
+    /// largest live mechanical system (0 without mechanics)
+    pub mech_dofs: usize,
+    pub steps: usize,
+    /// mesh generation and simulation [s]
+    pub seconds: f64,
+    /// deciding aperture against the reference, over the zones [mm]
+    pub max_aperture_err_mm: f64,
+    pub rms_aperture_err_mm: f64,
+    /// any of the four zone points [mm]
+    pub max_point_err_mm: f64,
+    /// either block's zone temperature [°C]
+    pub max_temp_err_c: f64,
+    pub verdicts_differ: usize,
+    /// fitted rate of this row's knob chain
+    pub rate: Option<f64>,
+    pub pareto: bool,
+}
+
+/// The study's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccuracyTable {
+    pub scene: String,
+    pub zones: usize,
+    pub rows: Vec<Row>,
+    /// Richardson estimate of the reference's deciding-aperture error [mm]
+    pub reference_error_mm: f64,
+    /// how the estimate was made, knob by knob
+    pub reference_note: String,
+    /// settings whose run failed, with the error
+    pub failed: Vec<(String, String)>,
+}
+
+/// What one run gives at a zone on its planned date.
+#[derive(Debug, Clone, PartialEq)]
+struct Sample {
+    apertures: Apertures,
+    deciding: Option<f64>,
+    temps: [Option<f64>; 2],
+    verdict: Verdict,
+}
+
+/// A finished run of one setting.
+struct Outcome {
+    row: Row,
+    samples: HashMap<ZoneId, Sample>,
+}
+
+/// The zones judged: every zone of grouting.csv planned within
+/// `horizon_days` of the epoch (all without one), by planned day.
+fn judged_zones(scene: &Scene, s: &Schedules, horizon_days: Option<i64>) -> Vec<(Day, ZoneId)> {
+    let mut z: Vec<(Day, ZoneId)> = s
+        .grouting
+        .iter()
+        .map(|g| (scene.epoch.day(g.planned), g.zone_id()))
+        .filter(|(d, _)| horizon_days.is_none_or(|h| d.0 <= h))
+        .collect();
+    z.sort();
+    z
+}
+
+/// Simulates one setting to the last judged zone and judges every zone.
+fn run_setting(
+    base: &Scene,
+    schedules: &Schedules,
+    zones: &[(Day, ZoneId)],
+    setting: &Setting,
+) -> Result<Outcome, StudyError> {
+    let mut scene = base.clone();
+    (setting.edit)(&mut scene);
+    let what = format!("{} ({})", scene.name, setting.name);
+    scene.validate().map_err(|e| e.with_origin(&what))?;
+    let t = Instant::now();
+    let mesh = app::build_mesh(&scene, &what)?;
+    let run_err = |source| StudyError::Run {
+        what: what.clone(),
+        source,
+    };
+    let mut sim = Simulation::new(&scene, &mesh, schedules).map_err(run_err)?;
+    if let Some(&(last, _)) = zones.last() {
+        sim.timeline.end_day = sim.timeline.end_day.min(last);
+    }
+    let stats = sim.run(None, &mut |_, _| {}).map_err(run_err)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let history = sim.history();
+    let layout = dam_layout(&mesh);
+    let rules = Rules::new(&scene.planner, &layout, &mesh, scene.epoch, schedules);
+    let idx = HistoryIndex::new(&history);
+    let grout = grout_days(&rules, schedules);
+    let samples = zones
+        .iter()
+        .map(|&(day, id)| {
+            let r = rules.evaluate(&idx, id, day, &grout);
+            let sample = Sample {
+                deciding: r.apertures_mm.at(scene.planner.aperture_point),
+                apertures: r.apertures_mm,
+                temps: [r.temp_a_c, r.temp_b_c],
+                verdict: r.verdict,
+            };
+            (id, sample)
+        })
+        .collect();
+    let row = Row {
+        name: setting.name.clone(),
+        knob: setting.knob.clone(),
+        h: setting.h,
+        elements: mesh.elements.len(),
+        thermal_dofs: mesh.n_thermal_dofs,
+        mech_dofs: stats.mechanics.map_or(0, |m| m.max_dofs),
+        steps: stats.steps,
+        seconds,
+        max_aperture_err_mm: 0.0,
+        rms_aperture_err_mm: 0.0,
+        max_point_err_mm: 0.0,
+        max_temp_err_c: 0.0,
+        verdicts_differ: 0,
+        rate: None,
+        pareto: false,
+    };
+    Ok(Outcome { row, samples })
+}
+
+/// Fills the error columns of `row` from its samples against `reference`'s.
+fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneId, Sample>) {
+    let (mut max, mut sq, mut n, mut points, mut temps, mut differ) =
+        (0.0f64, 0.0, 0, 0.0f64, 0.0f64, 0);
+    for (id, r) in reference {
+        let Some(s) = a.get(id) else {
+            differ += 1;
+            continue;
+        };
+        differ += usize::from(s.verdict != r.verdict);
+        if let (Some(x), Some(y)) = (s.deciding, r.deciding) {
+            max = max.max((x - y).abs());
+            sq += (x - y).powi(2);
+            n += 1;
+        }
+        let (sa, ra) = (&s.apertures, &r.apertures);
+        for (x, y) in [
+            (sa.upstream, ra.upstream),
+            (sa.center, ra.center),
+            (sa.downstream, ra.downstream),
+            (sa.min, ra.min),
+        ] {
+            if let (Some(x), Some(y)) = (x, y) {
+                points = points.max((x - y).abs());
+            }
+        }
+        for (x, y) in s.temps.iter().zip(&r.temps) {
+            if let (Some(x), Some(y)) = (x, y) {
+                temps = temps.max((x - y).abs());
+            }
+        }
+    }
+    row.max_aperture_err_mm = max;
+    row.rms_aperture_err_mm = if n > 0 { (sq / n as f64).sqrt() } else { 0.0 };
+    row.max_point_err_mm = points;
+    row.max_temp_err_c = temps;
+    row.verdicts_differ = differ;
+}
+
+/// The largest deciding-aperture difference between two runs [mm].
+fn largest_difference(a: &HashMap<ZoneId, Sample>, b: &HashMap<ZoneId, Sample>) -> f64 {
+    a.iter()
+        .filter_map(|(id, s)| Some((s.deciding?, b.get(id)?.deciding?)))
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Least-squares slope of log e against log h: the rate p of e = C·h^p.
+/// None with fewer than two usable points (e > 0, h > 0, distinct h).
+pub fn fit_rate(h: &[f64], e: &[f64]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = h
+        .iter()
+        .zip(e)
+        .filter(|(h, e)| **h > 0.0 && **e > 0.0 && h.is_finite() && e.is_finite())
+        .map(|(h, e)| (h.ln(), e.ln()))
+        .collect();
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (pts.len() >= 2 && sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// Which points (time, error) no other point beats: none both as fast and
+/// as accurate and better in one of them.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|&(t, e)| {
+            !points
+                .iter()
+                .any(|&(t2, e2)| t2 <= t && e2 <= e && (t2 < t || e2 < e))
+        })
+        .collect()
+}
+
+/// Runs the ladder and the reference; `horizon_days` judges only the zones
+/// planned within that many days of the epoch (and ends the runs there).
+/// `progress` gets a line per finished setting.
+pub fn study(
+    scene_path: &Path,
+    ladder: Vec<Setting>,
+    reference: Reference,
+    horizon_days: Option<i64>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<AccuracyTable, StudyError> {
+    let inputs = app::load_inputs(scene_path, None)?;
+    let zones = judged_zones(&inputs.scene, &inputs.schedules, horizon_days);
+    let run = |s: &Setting| run_setting(&inputs.scene, &inputs.schedules, &zones, s);
+    let first = run(&reference.setting)?;
+    let reference_samples = first.samples.clone();
+    let (mut pending, mut outcomes, mut failed) = (Some(first), Vec::new(), Vec::new());
+    for s in std::iter::once(&reference.setting).chain(&ladder) {
+        let mut o = match pending.take() {
+            Some(o) => o,
+            // A setting the solver refuses (a tolerance its own checks
+            // reject) is a finding, not the end of the study.
+            None => match run(s) {
+                Ok(o) => o,
+                Err(e) => {
+                    progress(&format!("{:<24} failed: {e}", s.name));
+                    failed.push((s.name.clone(), e.to_string()));
+                    continue;
+                }
+            },
+        };
+        compare(&mut o.row, &o.samples, &reference_samples);
+        progress(&format!(
+            "{:<24} {:>6} elements {:>7.1} s  deciding aperture max {:.4} mm, RMS {:.4} mm, temperature {:.3} °C, {} verdicts differ",
+            o.row.name, o.row.elements, o.row.seconds, o.row.max_aperture_err_mm, o.row.rms_aperture_err_mm, o.row.max_temp_err_c, o.row.verdicts_differ
+        ));
+        outcomes.push(o);
+    }
+    let (chains, note, estimate) = chains_and_estimate(&outcomes, &reference.levels);
+    let mut rows: Vec<Row> = outcomes.into_iter().map(|o| o.row).collect();
+    for row in rows.iter_mut() {
+        row.rate = chains.get(&row.knob).copied().flatten();
+    }
+    let front = pareto_front(
+        &rows
+            .iter()
+            .map(|r| (r.seconds, r.max_aperture_err_mm))
+            .collect::<Vec<_>>(),
+    );
+    for (r, f) in rows.iter_mut().zip(front) {
+        r.pareto = f;
+    }
+    Ok(AccuracyTable {
+        scene: inputs.scene.name.clone(),
+        zones: zones.len(),
+        rows,
+        failed,
+        reference_error_mm: estimate,
+        reference_note: note,
+    })
+}
+
+/// The rate of every knob chain (its settings with an `h` and the scene as
+/// given at h = 1), and the reference's Richardson estimate with its note.
+fn chains_and_estimate(
+    outcomes: &[Outcome],
+    levels: &[(String, f64)],
+) -> (HashMap<String, Option<f64>>, String, f64) {
+    let base = outcomes.iter().find(|o| o.row.knob == SCENE);
+    let mut knobs: Vec<&str> = outcomes
+        .iter()
+        .filter(|o| o.row.h.is_some() && o.row.knob != SCENE && o.row.knob != REFERENCE)
+        .map(|o| o.row.knob.as_str())
+        .collect();
+    let mut seen = std::collections::HashSet::new();
+    knobs.retain(|k| seen.insert(*k));
+    let (mut rates, mut notes, mut total) = (HashMap::new(), Vec::new(), 0.0);
+    for knob in knobs {
+        let mut chain: Vec<(f64, &Outcome)> = outcomes
+            .iter()
+            .filter(|o| o.row.knob == knob)
+            .filter_map(|o| Some((o.row.h?, o)))
+            .chain(base.map(|b| (1.0, b)))
+            .collect();
+        chain.sort_by(|a, b| b.0.total_cmp(&a.0));
+        chain.dedup_by(|a, b| a.0 == b.0);
+        // Coarsest first; d_i between level i and i+1, at the coarser h.
+        let (hs, ds): (Vec<f64>, Vec<f64>) = chain
+            .windows(2)
+            .map(|w| (w[0].0, largest_difference(&w[0].1.samples, &w[1].1.samples)))
+            .unzip();
+        let fitted = if ds.len() >= 2 {
+            fit_rate(&hs, &ds)
+        } else {
+            None
+        };
+        rates.insert(knob.to_string(), fitted);
+        let [.., (h2, coarse), (h1, fine)] = chain[..] else {
+            continue;
+        };
+        // A fitted p below 0.5 says the levels are not yet in the
+        // asymptotic range; dividing by 2^p − 1 ≈ 0 would blow the
+        // estimate up, so first order is assumed there.
+        let p = fitted.filter(|p| *p >= 0.5).unwrap_or(1.0);
+        let rich = largest_difference(&fine.samples, &coarse.samples) / ((h2 / h1).powf(p) - 1.0);
+        let ref_h = levels.iter().find(|l| l.0 == knob).map_or(1.0, |l| l.1);
+        let gap = chain
+            .iter()
+            .find(|c| (c.0 - ref_h).abs() < 1e-12)
+            .map_or(0.0, |c| largest_difference(&c.1.samples, &fine.samples));
+        total += rich + gap;
+        notes.push(format!(
+            "{knob}: {:.3} mm (p = {}{}, h {} → {}{})",
+            rich + gap,
+            crate::report::svg::num(p, 2),
+            match fitted {
+                Some(f) if f >= 0.5 => " fitted".to_string(),
+                Some(f) => format!(" assumed: the fitted {f:.2} is not asymptotic"),
+                None => " assumed".to_string(),
+            },
+            crate::report::svg::num(h2, 3),
+            crate::report::svg::num(h1, 3),
+            if gap > 0.0 {
+                format!("; the reference is at h = {ref_h}, {gap:.3} mm from the finest")
+            } else {
+                String::new()
+            }
+        ));
+    }
+    if notes.is_empty() {
+        notes.push("not estimated: no knob was refined in two levels".into());
+    }
+    (rates, notes.join("; "), total)
+}
+
+/// The scene's mesh with `along` × and `across` × the elements, and
+/// `layers` × the element layers per lift (blocks only); false where the
+/// geometry has no such key.
+pub fn refine_mesh(scene: &mut Scene, along: f64, across: f64, layers: u32) -> bool {
+    let scale = |n: &mut u32, f: f64| *n = ((*n as f64 * f).round() as u32).max(1);
+    if let Geometry::Blocks(g) = &mut scene.geometry {
+        scale(&mut g.elements_per_block, along);
+        scale(&mut g.elements_across, across);
+        g.layers_per_lift *= layers;
+        true
+    } else if let Geometry::Arch(g) = &mut scene.geometry {
+        scale(&mut g.elements_per_block, along);
+        scale(&mut g.elements_across, across);
+        layers == 1
+    } else {
+        false
+    }
+}
+
+/// The explicit multi-rate schedule of the issue: 0.1 d for 2 days after
+/// each pour, 0.25 d to day 7, then at most 1 d.
+pub fn multi_rate(scene: &mut Scene) {
+    let t = &mut scene.time;
+    t.step_schedule = vec![
+        ScheduledStep {
+            step_days: 0.1,
+            until_days: 2.0,
+        },
+        ScheduledStep {
+            step_days: 0.25,
+            until_days: 7.0,
+        },
+    ];
+    t.first_step_days = t.first_step_days.min(1.0);
+    t.max_step_days = 1.0;
+}
+
+/// Steps × `k`: first and longest step scaled (the growth kept).
+fn scale_steps(scene: &mut Scene, k: f64) {
+    scene.time.first_step_days *= k;
+    scene.time.max_step_days *= k;
+}
+
+/// The default ladder of `scene`: the scene as given; the thermal steps
+/// ×2, ×½, ×¼; the multi-rate schedule; consistent capacity;
+/// Crank–Nicolson; PCG at 1e-10; mechanical steps up to 3 days; elements
+/// across ×½ (when even) and ×2, along ×2, layers per lift ×2 (blocks);
+/// the presets. The reference: elements along and across ×2, steps ×¼ and
+/// consistent capacity.
+pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
+    let mut l = vec![Setting::new("scene as given", SCENE, Some(1.0), |_| {})];
+    for k in [2.0, 0.5, 0.25] {
+        l.push(Setting::new(
+            format!("steps x{k}"),
+            "steps",
+            Some(k),
+            move |s| scale_steps(s, k),
+        ));
+    }
+    l.push(Setting::new(
+        "multi-rate 0.1/0.25/1 d",
+        "multi-rate",
+        None,
+        multi_rate,
+    ));
+    l.push(Setting::new("consistent capacity", "capacity", None, |s| {
+        s.time.capacity = CapacityKind::Consistent
+    }));
+    l.push(Setting::new("theta 0.5", "theta", None, |s| {
+        s.time.theta = 0.5
+    }));
+    // The step's own residual check rejects anything above 1e-9.
+    l.push(Setting::new("pcg 1e-10", "thermal solver", None, |s| {
+        s.solver.thermal = ThermalSolverKind::Pcg;
+        s.solver.pcg_tolerance = 1e-10;
+    }));
+    if scene.any_mechanical() {
+        l.push(Setting::new("mechanics 3 d", "mechanics step", None, |s| {
+            s.time.mechanics_max_step_days = 3
+        }));
+    }
+    let mut probe = scene.clone();
+    let blocks = refine_mesh(&mut probe, 1.0, 1.0, 2);
+    if let Geometry::Blocks(g) = &scene.geometry {
+        if g.elements_across % 2 == 0 {
+            l.push(Setting::new("across x0.5", "across", Some(2.0), |s| {
+                refine_mesh(s, 1.0, 0.5, 1);
+            }));
+        }
+    }
+    l.push(Setting::new("across x2", "across", Some(0.5), |s| {
+        refine_mesh(s, 1.0, 2.0, 1);
+    }));
+    l.push(Setting::new("along x2", "along", Some(0.5), |s| {
+        refine_mesh(s, 2.0, 1.0, 1);
+    }));
+    if blocks {
+        l.push(Setting::new("layers x2", "layers", Some(0.5), |s| {
+            refine_mesh(s, 1.0, 1.0, 2);
+        }));
+    }
+    for p in Preset::ALL {
+        l.push(Setting::new(
+            format!("preset {}", p.name()),
+            "preset",
+            None,
+            move |s| crate::scene::preset::apply(p, &mut s.time, &|_| false),
+        ));
+    }
+    let reference = Reference {
+        setting: Setting::new("reference", REFERENCE, None, |s| {
+            refine_mesh(s, 2.0, 2.0, 1);
+            scale_steps(s, 0.25);
+            s.time.capacity = CapacityKind::Consistent;
+        }),
+        levels: vec![
+            ("across".into(), 0.5),
+            ("along".into(), 0.5),
+            ("steps".into(), 0.25),
+        ],
+    };
+    (l, reference)
+}
+
+/// Writes `accuracy.csv`, `accuracy.md` and `accuracy.svg` into `out`.
+pub fn write(table: &AccuracyTable, out: &Path) -> Result<(), StudyError> {
+    let io = |path: &Path| {
+        let path = path.display().to_string();
+        move |source| StudyError::Io {
+            action: "writing",
+            path,
+            source,
+        }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    for (name, text) in [
+        ("accuracy.csv", csv(table)),
+        ("accuracy.md", markdown(table)),
+        ("accuracy.svg", chart(table)),
+    ] {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(io(&path))?;
+    }
+    Ok(())
+}
+
+/// The table as CSV, one row per setting.
+pub fn csv(t: &AccuracyTable) -> String {
+    let mut s = String::from("setting,knob,h,elements,thermal_dofs,mech_dofs,steps,wall_s,max_aperture_err_mm,rms_aperture_err_mm,max_point_err_mm,max_temp_err_c,verdicts_differ,rate,pareto\n");
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
+    for r in &t.rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{:.3},{:.6},{:.6},{:.6},{:.4},{},{},{}",
+            r.name,
+            r.knob,
+            opt(r.h),
+            r.elements,
+            r.thermal_dofs,
+            r.mech_dofs,
+            r.steps,
+            r.seconds,
+            r.max_aperture_err_mm,
+            r.rms_aperture_err_mm,
+            r.max_point_err_mm,
+            r.max_temp_err_c,
+            r.verdicts_differ,
+            r.rate.map_or(String::new(), |p| format!("{p:.3}")),
+            r.pareto
+        );
+    }
+    s
+}
+
+/// The table in Markdown, with the reference's estimated error.
+pub fn markdown(t: &AccuracyTable) -> String {
+    let mut s = format!(
+        "# Accuracy against time: {}\n\n{} zones judged on their planned dates against the reference (estimated error of its deciding aperture {:.3} mm: {}). `*` marks the Pareto front (no setting both faster and more accurate).\n\n",
+        t.scene, t.zones, t.reference_error_mm, t.reference_note
+    );
+    s += "| setting | elements | dofs (thermal / mech.) | wall s | deciding aperture max / RMS err mm | any point mm | temperature err °C | verdicts differ | rate p | front |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+    for r in &t.rows {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} / {} | {:.1} | {:.3} / {:.3} | {:.3} | {:.2} | {} | {} | {} |",
+            r.name,
+            r.elements,
+            r.thermal_dofs,
+            r.mech_dofs,
+            r.seconds,
+            r.max_aperture_err_mm,
+            r.rms_aperture_err_mm,
+            r.max_point_err_mm,
+            r.max_temp_err_c,
+            r.verdicts_differ,
+            r.rate.map_or(String::new(), |p| format!("{p:.2}")),
+            if r.pareto { "*" } else { "" }
+        );
+    }
+    for (name, e) in &t.failed {
+        let _ = writeln!(s, "\n{name}: failed: {e}");
+    }
+    s
+}
+
+/// Deciding-aperture error against wall time, one marker per setting, the
+/// front joined by a line.
+pub fn chart(t: &AccuracyTable) -> String {
+    use crate::report::scale::{nice_ticks, tick_decimals, Scale};
+    use crate::report::svg::{self, num, Svg, FRAME, HEIGHT, WIDTH};
+    let f = FRAME;
+    let tmax = t.rows.iter().map(|r| r.seconds).fold(1e-3, f64::max);
+    let emax = t
+        .rows
+        .iter()
+        .map(|r| r.max_aperture_err_mm)
+        .fold(1e-3, f64::max);
+    let (xt, yt) = (nice_ticks(0.0, tmax, 6), nice_ticks(0.0, emax, 5));
+    let last = |v: &[f64]| v.last().copied().unwrap_or(1.0);
+    let x = Scale::new((0.0, last(&xt)), (f.left, f.right));
+    let y = Scale::new((0.0, last(&yt)), (f.bottom, f.top));
+    let mut s = Svg::new(WIDTH, HEIGHT);
+    svg::title(
+        &mut s,
+        &format!("{}: deciding-aperture error against time", t.scene),
+    );
+    s.open_group("axes");
+    for (&v, dec) in yt.iter().zip(std::iter::repeat(tick_decimals(
+        yt.get(1).copied().unwrap_or(1.0),
+    ))) {
+        s.line("grid", (f.left, y.map(v)), (f.right, y.map(v)));
+        s.text(
+            "tick-label",
+            (f.left - 6.0, y.map(v) + 4.0),
+            "end",
+            &num(v, dec),
+        );
+    }
+    for &v in &xt {
+        s.line("grid", (x.map(v), f.top), (x.map(v), f.bottom));
+        s.text(
+            "tick-label",
+            (x.map(v), f.bottom + 16.0),
+            "middle",
+            &num(v, 1),
+        );
+    }
+    s.line("axis", (f.left, f.bottom), (f.right, f.bottom));
+    s.line("axis", (f.left, f.top), (f.left, f.bottom));
+    s.text(
+        "axis-title",
+        ((f.left + f.right) / 2.0, f.bottom + 34.0),
+        "middle",
+        "wall time [s]",
+    );
+    s.vertical_text(
+        "axis-title",
+        (16.0, (f.top + f.bottom) / 2.0),
+        "largest deciding-aperture error [mm]",
+    );
+    s.close_group();
+    let mut front: Vec<(f64, f64)> = t
+        .rows
+        .iter()
+        .filter(|r| r.pareto)
+        .map(|r| (r.seconds, r.max_aperture_err_mm))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let front_px: Vec<(f64, f64)> = front.iter().map(|p| (x.map(p.0), y.map(p.1))).collect();
+    s.polyline("front", &front_px);
+    for r in &t.rows {
+        let c = (x.map(r.seconds), y.map(r.max_aperture_err_mm));
+        s.circle(if r.pareto { "on-front" } else { "setting" }, c, 3.5);
+        s.text("point-label", (c.0 + 6.0, c.1 - 4.0), "start", &r.name);
+    }
+    svg::legend(
+        &mut s,
+        f,
+        &[
+            ("on-front", "on the Pareto front", true),
+            ("setting", "other settings", true),
+        ],
+    );
+    let style = format!(
+        "{}{}",
+        svg::STYLE,
+        ".front{stroke:#d62728;fill:none;stroke-width:1.5}.on-front{fill:#d62728}.setting{fill:#1f77b4}.point-label{fill:#333;font-size:10px}"
+    );
+    s.finish(&format!("{}: accuracy against time", t.scene), &style)
+}
+
+/// The default ladder of the scene at `scene_path` (or, with
+/// `presets_only`, the scene as given and the presets against a time-only
+/// reference, [`time_reference`]: for scenes too large for the mesh
+/// knobs), written into `out`; `progress` gets a line per finished setting.
+pub fn accuracy(
+    scene_path: &Path,
+    out: &Path,
+    horizon_days: Option<i64>,
+    presets_only: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<AccuracyTable, StudyError> {
+    let scene = Scene::load(scene_path)?;
+    let (mut ladder, mut reference) = default_ladder(&scene);
+    if presets_only {
+        ladder.retain(|s| s.knob == SCENE || s.knob == "preset");
+        reference = time_reference();
+    }
+    let table = study(scene_path, ladder, reference, horizon_days, progress)?;
+    write(&table, out)?;
+    Ok(table)
+}
+
+/// The reference on the scene's own mesh: steps ×¼ and consistent
+/// capacity. Its stated error then leaves out the mesh's.
+pub fn time_reference() -> Reference {
+    Reference {
+        setting: Setting::new("reference (time only)", REFERENCE, None, |s| {
+            scale_steps(s, 0.25);
+            s.time.capacity = CapacityKind::Consistent;
+        }),
+        levels: vec![("steps".into(), 0.25)],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rate_of_a_second_order_sequence_is_two() {
+        let h = [1.0, 0.5, 0.25, 0.125];
+        let e: Vec<f64> = h.iter().map(|h| 3.7 * h * h).collect();
+        let p = fit_rate(&h, &e).unwrap();
+        assert!((p - 2.0).abs() < 1e-12, "p = {p}");
+        assert_eq!(fit_rate(&[1.0], &[2.0]), None);
+        assert_eq!(fit_rate(&[1.0, 1.0], &[2.0, 3.0]), None);
+    }
+
+    #[test]
+    fn front_of_a_hand_made_table() {
+        // (time, error): c is beaten by b (faster and more accurate), e ties
+        // a in time but is less accurate, d is the slowest but exact.
+        let pts = [(1.0, 0.5), (2.0, 0.2), (3.0, 0.3), (10.0, 0.0), (1.0, 0.6)];
+        assert_eq!(pareto_front(&pts), vec![true, true, false, true, false]);
+        // Two identical points are both on the front.
+        assert_eq!(pareto_front(&[(1.0, 1.0), (1.0, 1.0)]), vec![true, true]);
+    }
+}
