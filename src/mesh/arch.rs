@@ -49,12 +49,25 @@
 //! (the downstream face point + u·margin·ŷ, which avoids the centre of
 //! curvature when the margin is wider than R − t), beyond the abutments along
 //! the crest tangent of the last joint plane (± u·margin·(cos φ, sin φ)).
-//! Rock below the base uses the base ring. Since every node of a level k has
+//! Rock below the base uses the base ring.
+//!
+//! With `rock_grading_ratio` r > 1 the margins and the rock below are
+//! graded ([`grid::Spacing::graded`]): cells growing by r away from the dam,
+//! the first at most as large as the concrete cell next to it — the crest
+//! ring's element along the arc at mid-thickness ((R_c − t_c/2)·Φ/n, n the
+//! elements along the whole arc) beyond the abutments, the base thickness
+//! over `elements_across` upstream and downstream, and the lift height
+//! below — their count per direction the least that reaches the margin (or
+//! the depth); `rock_layers` and `rock_margin_elements` are then not used.
+//! Which far face of this rock faces which side is
+//! [`super::far::DamFrame::side`]'s rule.
+//!
+//! Since every node of a level k has
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its
 //! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
 
 use super::geometry::{at_least, check, non_negative, positive, ArchGeometry};
-use super::grid::{self, BlockRow, Layers};
+use super::grid::{self, BlockRow, Layers, Margins, Spacing};
 use super::{Mesh, MeshError};
 
 /// The arch's ring at one elevation.
@@ -128,27 +141,25 @@ pub fn generate_arch(
     let zone_lifts = check_params(p, lift_height, zone_height)?;
     let layer_z = layer_boundaries(p, lift_height)?;
     let n_layers = layer_z.len() - 1;
+    let rock = RockSpacing::of(p, lift_height);
     let row = BlockRow {
         n_blocks: p.n_blocks,
         elements_per_block: p.elements_per_block,
         elements_across: p.elements_across,
-        margin: if p.rock_margin_m > 0.0 {
-            p.rock_margin_elements as usize
-        } else {
-            0
+        margin: Margins {
+            left: rock.along.count,
+            right: rock.along.count,
+            upstream: rock.across.count,
+            downstream: rock.across.count,
         },
-        rock_layers: if p.rock_depth_m > 0.0 {
-            p.rock_layers as usize
-        } else {
-            0
-        },
+        rock_layers: rock.below.count,
         layers: n_layers as u64,
         rock_beyond_abutments: true,
     };
     row.size()?;
-    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, &layer_z);
+    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, rock.below, &layer_z);
     let rings = rings(p, &zs)?;
-    let pos = node_positions(p, &row, &rings, &zs);
+    let pos = node_positions(p, &rock, &rings, &zs);
     let blocks = foundation_layers(p, &layer_z, zone_lifts)
         .into_iter()
         .map(|b| (b, n_layers as u32 - b))
@@ -201,7 +212,49 @@ fn check_params(p: &ArchGeometry, lift_height: f64, zone_height: f64) -> Result<
     if p.rock_margin_m > 0.0 {
         at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
     }
+    grid::grading_ratio(p.rock_grading_ratio)?;
     grid::zone_lifts(lift_height, zone_height)
+}
+
+/// The rock cells of the three directions: margins along the arc (beyond
+/// the abutments) and across (upstream, downstream), layers below.
+struct RockSpacing {
+    along: Spacing,
+    across: Spacing,
+    below: Spacing,
+}
+
+impl RockSpacing {
+    /// Uniform counts of the scene at ratio 1, graded from the concrete
+    /// cells' sizes above it (module doc, "Rock").
+    fn of(p: &ArchGeometry, lift_height: f64) -> RockSpacing {
+        let r = p.rock_grading_ratio;
+        let margin = p.rock_margin_m;
+        let side = |first: f64| {
+            if margin <= 0.0 {
+                Spacing::uniform(0, 0.0)
+            } else if r == 1.0 {
+                Spacing::uniform(p.rock_margin_elements as usize, margin)
+            } else {
+                Spacing::graded(margin, first, r)
+            }
+        };
+        let n_along = (p.n_blocks as f64) * (p.elements_per_block as f64);
+        let arc = (p.crest_radius_m - 0.5 * p.crest_thickness_m)
+            * p.central_angle_deg.to_radians()
+            / n_along;
+        RockSpacing {
+            along: side(arc),
+            across: side(p.base_thickness_m / p.elements_across as f64),
+            below: if p.rock_depth_m <= 0.0 {
+                Spacing::uniform(0, 0.0)
+            } else if r == 1.0 {
+                Spacing::uniform(p.rock_layers as usize, p.rock_depth_m)
+            } else {
+                Spacing::graded(p.rock_depth_m, lift_height, r)
+            },
+        }
+    }
 }
 
 /// Concrete layer boundaries: one layer per lift from the base, the crest
@@ -245,23 +298,23 @@ fn rings(p: &ArchGeometry, zs: &[f64]) -> Result<Vec<Ring>, MeshError> {
 /// Grid nodes (i fastest): radial across the dam and in the upstream margin,
 /// along +y in the downstream margin, along the crest tangent beyond the
 /// abutments (module doc, "Rock").
-fn node_positions(p: &ArchGeometry, row: &BlockRow, rings: &[Ring], zs: &[f64]) -> Vec<[f64; 3]> {
-    let (m, margin) = (row.margin, p.rock_margin_m);
+fn node_positions(p: &ArchGeometry, rock: &RockSpacing, rings: &[Ring], zs: &[f64]) -> Vec<[f64; 3]> {
+    let (ma, mc) = (rock.along.count, rock.across.count);
     let na = p.elements_across as usize;
     let nd = p.n_blocks as usize * p.elements_per_block as usize;
-    let (ni, nj) = (nd + 2 * m, na + 2 * m);
+    let (ni, nj) = (nd + 2 * ma, na + 2 * mc);
     let phi_total = p.central_angle_deg.to_radians();
     let phi_s = -0.5 * phi_total;
     let phi_e = 0.5 * phi_total;
     // Per i: (angle, extension along the tangent).
     let along: Vec<(f64, f64)> = (0..=ni)
         .map(|i| {
-            if i < m {
-                (phi_s, -margin * (m - i) as f64 / m as f64)
-            } else if i > m + nd {
-                (phi_e, margin * (i - m - nd) as f64 / m as f64)
+            if i < ma {
+                (phi_s, -rock.along.distance(ma - i))
+            } else if i > ma + nd {
+                (phi_e, rock.along.distance(i - ma - nd))
             } else {
-                (phi_s + phi_total * (i - m) as f64 / nd as f64, 0.0)
+                (phi_s + phi_total * (i - ma) as f64 / nd as f64, 0.0)
             }
         })
         .collect();
@@ -269,12 +322,12 @@ fn node_positions(p: &ArchGeometry, row: &BlockRow, rings: &[Ring], zs: &[f64]) 
     let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * zs.len());
     for (rg, &z) in rings.iter().zip(zs) {
         for j in 0..=nj {
-            let (r, dy) = if j < m {
-                (rg.r_up + margin * (m - j) as f64 / m as f64, 0.0)
-            } else if j <= m + na {
-                (rg.r_up - rg.t * (j - m) as f64 / na as f64, 0.0)
+            let (r, dy) = if j < mc {
+                (rg.r_up + rock.across.distance(mc - j), 0.0)
+            } else if j <= mc + na {
+                (rg.r_up - rg.t * (j - mc) as f64 / na as f64, 0.0)
             } else {
-                (rg.r_up - rg.t, margin * (j - m - na) as f64 / m as f64)
+                (rg.r_up - rg.t, rock.across.distance(j - mc - na))
             };
             for &(phi, ext) in &along {
                 let (s, c) = phi.sin_cos();
