@@ -240,8 +240,7 @@ impl RockSpacing {
             }
         };
         let n_along = (p.n_blocks as f64) * (p.elements_per_block as f64);
-        let arc = (p.crest_radius_m - 0.5 * p.crest_thickness_m)
-            * p.central_angle_deg.to_radians()
+        let arc = (p.crest_radius_m - 0.5 * p.crest_thickness_m) * p.central_angle_deg.to_radians()
             / n_along;
         RockSpacing {
             along: side(arc),
@@ -298,7 +297,12 @@ fn rings(p: &ArchGeometry, zs: &[f64]) -> Result<Vec<Ring>, MeshError> {
 /// Grid nodes (i fastest): radial across the dam and in the upstream margin,
 /// along +y in the downstream margin, along the crest tangent beyond the
 /// abutments (module doc, "Rock").
-fn node_positions(p: &ArchGeometry, rock: &RockSpacing, rings: &[Ring], zs: &[f64]) -> Vec<[f64; 3]> {
+fn node_positions(
+    p: &ArchGeometry,
+    rock: &RockSpacing,
+    rings: &[Ring],
+    zs: &[f64],
+) -> Vec<[f64; 3]> {
     let (ma, mc) = (rock.along.count, rock.across.count);
     let na = p.elements_across as usize;
     let nd = p.n_blocks as usize * p.elements_per_block as usize;

@@ -277,7 +277,9 @@ pub fn face_centre_normal(mesh: &Mesh, face: &SurfaceFace) -> ([f64; 3], [f64; 3
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ];
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(f64::MIN_POSITIVE);
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        .sqrt()
+        .max(f64::MIN_POSITIVE);
     (centre, n.map(|v| v / len))
 }
 
@@ -357,7 +359,10 @@ mod tests {
         let sides = mesh.far_sides();
         assert_eq!(
             sides.len(),
-            mesh.surfaces.iter().filter(|f| f.kind == SurfaceKind::Far).count()
+            mesh.surfaces
+                .iter()
+                .filter(|f| f.kind == SurfaceKind::Far)
+                .count()
         );
         for (f, got) in sides {
             let want = by_construction(f.face);
@@ -411,7 +416,12 @@ mod tests {
 
     #[test]
     fn blocks_far_faces_are_read_by_their_side() {
-        for (margin, depth, ratio) in [(0.0, 0.0, 1.0), (0.0, 12.0, 1.0), (25.0, 12.0, 1.0), (25.0, 30.0, 1.4)] {
+        for (margin, depth, ratio) in [
+            (0.0, 0.0, 1.0),
+            (0.0, 12.0, 1.0),
+            (25.0, 12.0, 1.0),
+            (25.0, 30.0, 1.4),
+        ] {
             let mesh = generate_blocks(&blocks(margin, depth, ratio), 3.0, 6.0).unwrap();
             let counts = check_all(&mesh);
             assert!(counts[FarSide::Base.index()] > 0);

@@ -96,8 +96,7 @@ impl Spacing {
         };
         let mut count = (n.max(1.0) as usize).min(10_000);
         // ceil of a quotient that is a whole number up to round-off
-        while count > 1 && length * (ratio - 1.0) / (ratio.powi(count as i32 - 1) - 1.0) <= first
-        {
+        while count > 1 && length * (ratio - 1.0) / (ratio.powi(count as i32 - 1) - 1.0) <= first {
             count -= 1;
         }
         Spacing {
@@ -212,13 +211,7 @@ impl BlockRow {
     /// Elevations of the logical levels k: `rock_layers` layers over
     /// `rock_depth` below `base` (equal ones, or graded by `below` when it
     /// is not uniform), then the concrete layer boundaries `layer_z`.
-    pub fn level_z(
-        &self,
-        base: f64,
-        rock_depth: f64,
-        below: Spacing,
-        layer_z: &[f64],
-    ) -> Vec<f64> {
+    pub fn level_z(&self, base: f64, rock_depth: f64, below: Spacing, layer_z: &[f64]) -> Vec<f64> {
         let rl = self.rock_layers;
         (0..rl + layer_z.len())
             .map(|k| {
@@ -817,13 +810,21 @@ mod tests {
 
     #[test]
     fn graded_cells_follow_the_geometric_law() {
-        for (length, first, ratio) in [(60.0, 3.0, 1.3), (150.0, 4.2, 1.5), (40.0, 3.0, 2.0), (10.0, 3.0, 1.2)] {
+        for (length, first, ratio) in [
+            (60.0, 3.0, 1.3),
+            (150.0, 4.2, 1.5),
+            (40.0, 3.0, 2.0),
+            (10.0, 3.0, 1.2),
+        ] {
             let s = Spacing::graded(length, first, ratio);
             let sizes: Vec<f64> = (0..s.count)
                 .map(|k| s.distance(k + 1) - s.distance(k))
                 .collect();
             // first cell within (first/r, first]
-            assert!(sizes[0] <= first * (1.0 + 1e-12) && sizes[0] > first / ratio, "{sizes:?}");
+            assert!(
+                sizes[0] <= first * (1.0 + 1e-12) && sizes[0] > first / ratio,
+                "{sizes:?}"
+            );
             // each cell r times the one before
             for w in sizes.windows(2) {
                 assert!((w[1] / w[0] - ratio).abs() < 1e-12, "{sizes:?}");
@@ -834,7 +835,10 @@ mod tests {
             let sum: f64 = sizes.iter().sum();
             assert!((sum - length).abs() < 1e-12 * length);
             let fewer = length * (ratio - 1.0) / (ratio.powi(s.count as i32 - 1) - 1.0);
-            assert!(s.count == 1 || fewer > first, "one cell fewer would start at {fewer}");
+            assert!(
+                s.count == 1 || fewer > first,
+                "one cell fewer would start at {fewer}"
+            );
         }
         // a margin no wider than the first cell is one cell
         assert_eq!(Spacing::graded(2.0, 3.0, 1.3).count, 1);

@@ -61,8 +61,8 @@ pub mod arch;
 pub mod blocks;
 pub mod far;
 pub mod geometry;
-pub mod import;
 mod grid;
+pub mod import;
 pub mod vtu;
 
 use std::collections::{BTreeMap, HashMap};

@@ -251,6 +251,28 @@ pub struct Concrete {
     /// G(τ) = eps_inf·(1 − exp(−c τ^d)); required by `autogenous`.
     #[serde(default)]
     pub autogenous: Option<AutogenousLaw>,
+    /// The temperature a new lift's nodes shared with older concrete or
+    /// rock take at its pour: `keep` (default, the older material's) or
+    /// `placement` (the pour's placement temperature).
+    #[serde(default, skip_serializing_if = "SharedNodes::is_keep")]
+    pub placement_on_shared_nodes: SharedNodes,
+}
+
+/// `concrete.placement_on_shared_nodes` (see the thermal module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SharedNodes {
+    /// Shared nodes keep the temperature of the concrete or rock below.
+    #[default]
+    Keep,
+    /// Shared nodes take the new lift's placement temperature.
+    Placement,
+}
+
+impl SharedNodes {
+    fn is_keep(&self) -> bool {
+        *self == SharedNodes::Keep
+    }
 }
 
 /// `[rock]`: the foundation rock's thermal properties

@@ -272,7 +272,29 @@ impl ThermalModel {
             .cloned()
             .unwrap_or_default();
         self.lift_pour_day.insert((block, lift), day);
-        self.birth(&elems, |_| placement_c);
+        if self.settings.placement_on_shared_nodes {
+            self.birth_resetting(&elems, placement_c);
+        } else {
+            self.birth(&elems, |_| placement_c);
+        }
+    }
+
+    /// Makes `elems` live with every one of their dofs at `placement_c`,
+    /// those shared with live elements included; the births' heat is the
+    /// change of the stored heat, so the ledger stays exact.
+    fn birth_resetting(&mut self, elems: &[u32], placement_c: f64) {
+        let before = self.stored_heat();
+        for &e in elems {
+            for &d in &self.data.dofs[e as usize] {
+                self.state.temperature[d as usize] = placement_c;
+            }
+        }
+        for &e in elems {
+            self.state.live[e as usize] = true;
+            self.faces.add_element(e, &self.data.dofs[e as usize]);
+        }
+        self.state.ledger.births += self.stored_heat() - before;
+        self.dirty = true;
     }
 
     /// Starts the stages that begin on `day` and ends those that end on `day`.

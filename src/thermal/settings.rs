@@ -56,6 +56,10 @@ pub struct ThermalSettings {
     /// Fixed temperature [°C] of each far side, in
     /// [`FarSide::ALL`](crate::mesh::FarSide::ALL) order; `None` = adiabatic.
     pub far_temperature_c: [Option<f64>; 5],
+    /// A pour resets the nodes its lift shares with live concrete or rock
+    /// to the placement temperature (`concrete.placement_on_shared_nodes =
+    /// "placement"`); false keeps theirs (default).
+    pub placement_on_shared_nodes: bool,
 }
 
 impl ThermalSettings {
@@ -104,6 +108,8 @@ impl ThermalSettings {
             pcg_tolerance: scene.solver.pcg_tolerance,
             pcg_max_iterations: scene.solver.pcg_max_iterations as usize,
             far_temperature_c: scene.boundary.temperatures(),
+            placement_on_shared_nodes: c.placement_on_shared_nodes
+                == crate::scene::SharedNodes::Placement,
         }
     }
 }
