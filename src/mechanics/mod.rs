@@ -11,7 +11,8 @@
 //! autogenous increment. Every element is born stress-free at its pour date:
 //! only displacement increments after birth strain it, so its stress-free
 //! temperature is its own temperature at birth. The rock foundation is
-//! elastic and fixed on its far boundary.
+//! elastic; its far faces are fixed, on rollers or free per side
+//! (`[boundary]`, [`supports`]).
 //!
 //! Because ν is constant, each element's stiffness is Ē_e·K̂_e with K̂_e the
 //! unit-modulus stiffness computed once; the global matrix changes every
@@ -38,6 +39,8 @@ pub mod joints;
 pub mod live;
 pub mod model;
 pub mod settings;
+pub mod supports;
 
 pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};
+pub use supports::SupportError;

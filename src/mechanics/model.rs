@@ -57,6 +57,8 @@ pub enum MechError {
     Joints { day: f64, source: JointStepError },
     #[error("mechanical unknowns on day {day:.3}: {source}")]
     Live { day: f64, source: LiveError },
+    #[error(transparent)]
+    Supports(#[from] super::supports::SupportError),
 }
 
 /// Prescribed zero displacement increments: (node, component 0..3).

@@ -49,7 +49,20 @@
 //! (the downstream face point + u·margin·ŷ, which avoids the centre of
 //! curvature when the margin is wider than R − t), beyond the abutments along
 //! the crest tangent of the last joint plane (± u·margin·(cos φ, sin φ)).
-//! Rock below the base uses the base ring. Since every node of a level k has
+//! Rock below the base uses the base ring.
+//!
+//! With `rock_grading_ratio` r > 1 the margins and the rock below are
+//! graded ([`grid::Spacing::graded`]): cells growing by r away from the dam,
+//! the first at most as large as the concrete cell next to it — the crest
+//! ring's element along the arc at mid-thickness ((R_c − t_c/2)·Φ/n, n the
+//! elements along the whole arc) beyond the abutments, the base thickness
+//! over `elements_across` upstream and downstream, and the lift height
+//! below — their count per direction the least that reaches the margin (or
+//! the depth); `rock_layers` and `rock_margin_elements` are then not used.
+//! Which far face of this rock faces which side is
+//! [`super::far::DamFrame::side`]'s rule.
+//!
+//! Since every node of a level k has
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its
 //! plan corner, positive for all these maps while Φ < 180° and R − t > 0.
 //!
@@ -59,7 +72,7 @@
 //! point of a level at an along-parameter (here φ) and across position.
 
 use super::geometry::{at_least, check, non_negative, positive, ArchGeometry};
-use super::grid::{self, BlockRow, Layers};
+use super::grid::{self, BlockRow, Layers, Margins, Spacing};
 use super::{Mesh, MeshError};
 
 /// The arch's ring at one elevation.
@@ -141,7 +154,7 @@ pub fn generate_arch(
     let zone_lifts = check_params(p, lift_height, zone_height)?;
     let layer_z = layer_boundaries(p.base_elevation_m, p.height_m, lift_height)?;
     let n_layers = layer_z.len() - 1;
-    let row = block_row(&RowCounts {
+    let (row, rock) = block_row(&RowCounts {
         n_blocks: p.n_blocks,
         elements_per_block: p.elements_per_block,
         elements_across: p.elements_across,
@@ -149,16 +162,23 @@ pub fn generate_arch(
         rock_layers: p.rock_layers,
         rock_margin_m: p.rock_margin_m,
         rock_margin_elements: p.rock_margin_elements,
+        rock_grading_ratio: p.rock_grading_ratio,
+        first_cells_m: [
+            (p.crest_radius_m - 0.5 * p.crest_thickness_m) * p.central_angle_deg.to_radians()
+                / (p.n_blocks as f64 * p.elements_per_block as f64),
+            p.base_thickness_m / p.elements_across as f64,
+            lift_height,
+        ],
         n_layers,
     })?;
-    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, &layer_z);
+    let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, rock.below, &layer_z);
     let rings = rings(p, &zs)?;
     let phi_total = p.central_angle_deg.to_radians();
     let nd = p.n_blocks as usize * p.elements_per_block as usize;
     let along: Vec<f64> = (0..=nd)
         .map(|i| -0.5 * phi_total + phi_total * i as f64 / nd as f64)
         .collect();
-    let pos = node_positions(rings.as_slice(), &row, p.rock_margin_m, &along, &zs);
+    let pos = node_positions(rings.as_slice(), &row, &rock, &along, &zs);
     let blocks = foundation_layers(p, &layer_z, zone_lifts)
         .into_iter()
         .map(|b| (b, n_layers as u32 - b))
@@ -182,32 +202,35 @@ pub(super) struct RowCounts {
     pub rock_layers: u32,
     pub rock_margin_m: f64,
     pub rock_margin_elements: u32,
+    /// Growth of the rock cells away from the dam (1: the uniform counts).
+    pub rock_grading_ratio: f64,
+    /// The concrete cells the graded rock starts from \[m\]: along the arc
+    /// (beyond the abutments), across (upstream and downstream), and the
+    /// lift height (below).
+    pub first_cells_m: [f64; 3],
     /// Concrete element layers (one per lift).
     pub n_layers: usize,
 }
 
-/// The arch's logical grid, checked for size: no margin cells without a
-/// margin, no rock layers without rock depth, rock beyond the abutments.
-pub(super) fn block_row(c: &RowCounts) -> Result<BlockRow, MeshError> {
+/// The grid of an arch and the spacing of its rock.
+pub(super) fn block_row(c: &RowCounts) -> Result<(BlockRow, RockSpacing), MeshError> {
+    let rock = RockSpacing::of(c);
     let row = BlockRow {
         n_blocks: c.n_blocks,
         elements_per_block: c.elements_per_block,
         elements_across: c.elements_across,
-        margin: if c.rock_margin_m > 0.0 {
-            c.rock_margin_elements as usize
-        } else {
-            0
+        margin: Margins {
+            left: rock.along.count,
+            right: rock.along.count,
+            upstream: rock.across.count,
+            downstream: rock.across.count,
         },
-        rock_layers: if c.rock_depth_m > 0.0 {
-            c.rock_layers as usize
-        } else {
-            0
-        },
+        rock_layers: rock.below.count,
         layers: c.n_layers as u64,
         rock_beyond_abutments: true,
     };
     row.size()?;
-    Ok(row)
+    Ok((row, rock))
 }
 
 /// Checks every parameter in scene order; returns the lifts per zone.
@@ -248,7 +271,46 @@ fn check_params(p: &ArchGeometry, lift_height: f64, zone_height: f64) -> Result<
     if p.rock_margin_m > 0.0 {
         at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
     }
+    grid::grading_ratio(p.rock_grading_ratio)?;
     grid::zone_lifts(lift_height, zone_height)
+}
+
+/// The rock cells of the three directions: margins along the arc (beyond
+/// the abutments) and across (upstream, downstream), layers below.
+pub(super) struct RockSpacing {
+    pub along: Spacing,
+    pub across: Spacing,
+    pub below: Spacing,
+}
+
+impl RockSpacing {
+    /// The scene's uniform counts at ratio 1; above it graded from the sizes
+    /// of the concrete cells next to the rock (module doc, "Rock").
+    fn of(c: &RowCounts) -> RockSpacing {
+        let r = c.rock_grading_ratio;
+        let margin = c.rock_margin_m;
+        let [first_along, first_across, first_below] = c.first_cells_m;
+        let side = |first: f64| {
+            if margin <= 0.0 {
+                Spacing::uniform(0, 0.0)
+            } else if r == 1.0 {
+                Spacing::uniform(c.rock_margin_elements as usize, margin)
+            } else {
+                Spacing::graded(margin, first, r)
+            }
+        };
+        RockSpacing {
+            along: side(first_along),
+            across: side(first_across),
+            below: if c.rock_depth_m <= 0.0 {
+                Spacing::uniform(0, 0.0)
+            } else if r == 1.0 {
+                Spacing::uniform(c.rock_layers as usize, c.rock_depth_m)
+            } else {
+                Spacing::graded(c.rock_depth_m, first_below, r)
+            },
+        }
+    }
 }
 
 /// Concrete layer boundaries from `base` over the height `h`: one layer per
@@ -329,23 +391,23 @@ impl ArchPlan for [Ring] {
 pub(super) fn node_positions(
     plan: &(impl ArchPlan + ?Sized),
     row: &BlockRow,
-    margin: f64,
+    rock: &RockSpacing,
     along_u: &[f64],
     zs: &[f64],
 ) -> Vec<[f64; 3]> {
-    let m = row.margin;
+    let (ma, mc) = (rock.along.count, rock.across.count);
     let na = row.elements_across as usize;
     let nd = along_u.len() - 1;
-    let (ni, nj) = (nd + 2 * m, na + 2 * m);
+    let (ni, nj) = (nd + 2 * ma, na + 2 * mc);
     // Per i: (along-parameter, extension along the tangent).
     let along: Vec<(f64, f64)> = (0..=ni)
         .map(|i| {
-            if i < m {
-                (along_u[0], -margin * (m - i) as f64 / m as f64)
-            } else if i > m + nd {
-                (along_u[nd], margin * (i - m - nd) as f64 / m as f64)
+            if i < ma {
+                (along_u[0], -rock.along.distance(ma - i))
+            } else if i > ma + nd {
+                (along_u[nd], rock.along.distance(i - ma - nd))
             } else {
-                (along_u[i - m], 0.0)
+                (along_u[i - ma], 0.0)
             }
         })
         .collect();
@@ -353,12 +415,12 @@ pub(super) fn node_positions(
     let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * zs.len());
     for (k, &z) in zs.iter().enumerate() {
         for j in 0..=nj {
-            let across = if j < m {
-                Across::Upstream(margin * (m - j) as f64 / m as f64)
-            } else if j <= m + na {
-                Across::Dam((j - m) as f64 / na as f64)
+            let across = if j < mc {
+                Across::Upstream(rock.across.distance(mc - j))
+            } else if j <= mc + na {
+                Across::Dam((j - mc) as f64 / na as f64)
             } else {
-                Across::Downstream(margin * (j - m - na) as f64 / m as f64)
+                Across::Downstream(rock.across.distance(j - mc - na))
             };
             for &(u, ext) in &along {
                 let [x, y] = plan.plan_point(k, u, across, ext);

@@ -91,7 +91,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arch::{self, Across, ArchPlan, RowCounts};
 use super::arch_curves::{ArchType, HalfArch, HalfCurve};
-use super::geometry::{at_least, check, non_negative, one, one_f, positive, two};
+use super::geometry::{at_least, check, is_one, non_negative, one, one_f, positive, two};
 use super::grid::{self, Layers};
 use super::{Mesh, MeshError};
 
@@ -142,6 +142,11 @@ pub struct ArchTableGeometry {
     /// Rock elements across each margin.
     #[serde(default = "one")]
     pub rock_margin_elements: u32,
+    /// Growth ratio of the rock cells away from the dam, in [1, 3]; 1
+    /// (default) = uniform `rock_layers` and `rock_margin_elements`, above 1
+    /// graded from the concrete cells' sizes (module doc of [`super::arch`]).
+    #[serde(default = "one_f", skip_serializing_if = "is_one")]
+    pub rock_grading_ratio: f64,
     /// The two tables as read by [`crate::scene::Scene::load`]; never
     /// written in a scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -303,7 +308,8 @@ pub fn generate_arch_table(
     let (base, crest) = (g.base_elevation_m, g.crest_elevation_m);
     let layer_z = arch::layer_boundaries(base, crest - base, lift_height)?;
     let n_layers = layer_z.len() - 1;
-    let row = arch::block_row(&RowCounts {
+    let base_row = tables.row_at(base);
+    let (row, rock) = arch::block_row(&RowCounts {
         n_blocks: g.n_blocks,
         elements_per_block: g.elements_per_block,
         elements_across: g.elements_across,
@@ -311,9 +317,15 @@ pub fn generate_arch_table(
         rock_layers: g.rock_layers,
         rock_margin_m: g.rock_margin_m,
         rock_margin_elements: g.rock_margin_elements,
+        rock_grading_ratio: g.rock_grading_ratio,
+        first_cells_m: [
+            g.crest_length_m / (g.n_blocks as f64 * g.elements_per_block as f64),
+            (base_row.crown_downstream_y_m - base_row.crown_upstream_y_m) / g.elements_across as f64,
+            lift_height,
+        ],
         n_layers,
     })?;
-    let zs = row.level_z(base, g.rock_depth_m, &layer_z);
+    let zs = row.level_z(base, g.rock_depth_m, rock.below, &layer_z);
     let crest_row = tables.row_at(crest);
     let crest_curves = [
         HalfCurve {
@@ -331,7 +343,7 @@ pub fn generate_arch_table(
         .iter()
         .map(|&z| level(g, tables, &crest_curves, z))
         .collect::<Result<Vec<Level>, MeshError>>()?;
-    let pos = arch::node_positions(levels.as_slice(), &row, g.rock_margin_m, &along, &zs);
+    let pos = arch::node_positions(levels.as_slice(), &row, &rock, &along, &zs);
     let blocks = bounds
         .windows(2)
         .map(|w| {
@@ -408,6 +420,7 @@ fn check_params(
     if g.rock_margin_m > 0.0 {
         at_least("rock_margin_elements", g.rock_margin_elements, 1)?;
     }
+    grid::grading_ratio(g.rock_grading_ratio)?;
     grid::zone_lifts(lift_height, zone_height)
 }
 

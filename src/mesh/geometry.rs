@@ -85,6 +85,12 @@ pub struct BlocksGeometry {
     /// Rock elements across each margin (used when `rock_margin_m > 0`).
     #[serde(default = "one")]
     pub rock_margin_elements: u32,
+    /// Growth ratio of the rock cells away from the dam, in [1, 3]; 1
+    /// (default) = uniform `rock_layers` and `rock_margin_elements`, above 1
+    /// the first cell is the size of the concrete cell it touches and the
+    /// counts follow (module doc of [`super::blocks`]).
+    #[serde(default = "one_f", skip_serializing_if = "is_one")]
+    pub rock_grading_ratio: f64,
     /// Elevation of the block bases \[m\].
     #[serde(default)]
     pub base_elevation_m: f64,
@@ -141,6 +147,11 @@ pub struct ArchGeometry {
     /// Rock elements across each margin.
     #[serde(default = "one")]
     pub rock_margin_elements: u32,
+    /// Growth ratio of the rock cells away from the dam, in [1, 3]; 1
+    /// (default) = uniform `rock_layers` and `rock_margin_elements`, above 1
+    /// graded from the concrete cells' sizes (module doc of [`super::arch`]).
+    #[serde(default = "one_f", skip_serializing_if = "is_one")]
+    pub rock_grading_ratio: f64,
 }
 
 pub(super) fn one() -> u32 {
@@ -151,6 +162,9 @@ pub(super) fn two() -> u32 {
 }
 pub(super) fn one_f() -> f64 {
     1.0
+}
+pub(super) fn is_one(v: &f64) -> bool {
+    *v == 1.0
 }
 fn two_f() -> f64 {
     2.0

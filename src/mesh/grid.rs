@@ -30,14 +30,14 @@ enum Cell {
 
 /// The logical grid both generators lay out: a row of `n_blocks` blocks along
 /// i (`elements_per_block` cells each), `elements_across` cells thick along
-/// j, inside `margin` cells of rock on every side, on `rock_layers` layers of
-/// rock with `layers` concrete layers above them along k.
+/// j, inside margins of rock cells (a count per side), on `rock_layers`
+/// layers of rock with `layers` concrete layers above them along k.
 pub(crate) struct BlockRow {
     pub n_blocks: u32,
     pub elements_per_block: u32,
     pub elements_across: u32,
-    /// Cells beyond the blocks on every side (0: no margin).
-    pub margin: usize,
+    /// Cells beyond the blocks per side (0: no margin there).
+    pub margin: Margins,
     /// Rock cell layers below the lowest concrete layer.
     pub rock_layers: usize,
     /// Concrete element layers of the dam.
@@ -45,6 +45,80 @@ pub(crate) struct BlockRow {
     /// Rock fills the margins beyond the abutments up to the crest (the arch's
     /// valley sides); without it they are rock only below the concrete.
     pub rock_beyond_abutments: bool,
+}
+
+/// Rock cells beyond the blocks on each side of a [`BlockRow`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Margins {
+    /// Beyond the left abutment (low i).
+    pub left: usize,
+    /// Beyond the right abutment (high i).
+    pub right: usize,
+    /// Upstream (low j).
+    pub upstream: usize,
+    /// Downstream (high j).
+    pub downstream: usize,
+}
+
+/// How the rock cells of one margin (or of the layers below the dam) are
+/// spaced: `count` cells over `length` metres, from the dam outwards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Spacing {
+    pub count: usize,
+    pub length: f64,
+    /// Ratio of neighbouring cells' sizes, the outer over the inner
+    /// (1 = uniform, the only case [`Spacing::graded`] does not make).
+    pub ratio: f64,
+}
+
+impl Spacing {
+    /// Uniform cells: `count` over `length`.
+    pub fn uniform(count: usize, length: f64) -> Spacing {
+        Spacing {
+            count,
+            length,
+            ratio: 1.0,
+        }
+    }
+
+    /// Geometric cells growing by `ratio` (> 1) away from the dam, over
+    /// exactly `length`: the count is the least whose first cell,
+    /// s = length·(r − 1)/(rⁿ − 1), is no larger than `first` (the size of
+    /// the concrete cell it touches), so s ∈ (first/r, first]. `length <=
+    /// first` gives one cell. The count is capped at 10,000 (a ratio of
+    /// 1.001 on a 1 km margin of 0.1 m cells would be 4,000), so the size
+    /// check of [`BlockRow::size`] sees any absurd request.
+    pub fn graded(length: f64, first: f64, ratio: f64) -> Spacing {
+        let n = if length <= first {
+            1.0
+        } else {
+            ((1.0 + length * (ratio - 1.0) / first).ln() / ratio.ln()).ceil()
+        };
+        let mut count = (n.max(1.0) as usize).min(10_000);
+        // ceil of a quotient that is a whole number up to round-off
+        while count > 1 && length * (ratio - 1.0) / (ratio.powi(count as i32 - 1) - 1.0) <= first {
+            count -= 1;
+        }
+        Spacing {
+            count,
+            length,
+            ratio,
+        }
+    }
+
+    /// Distance from the dam of the cell boundary `k` (0 at the dam, `count`
+    /// at the far edge, which is exactly `length` when graded).
+    pub fn distance(&self, k: usize) -> f64 {
+        // uniform first: the expression of the first version, bit for bit
+        if self.ratio == 1.0 {
+            return self.length * k as f64 / self.count as f64;
+        }
+        if k >= self.count {
+            return self.length;
+        }
+        let r = self.ratio;
+        self.length * (r.powi(k as i32) - 1.0) / (r.powi(self.count as i32) - 1.0)
+    }
 }
 
 /// The concrete layers and lifts a generator chose for its [`BlockRow`].
@@ -113,11 +187,14 @@ impl BlockRow {
     /// allocated (a count beyond `u32`, or more nodes or elements than
     /// [`MAX_ENTITIES`], is [`MeshError::TooLarge`]).
     pub fn size(&self) -> Result<(usize, usize, usize), MeshError> {
-        let m = self.margin as u64;
+        let m = self.margin;
         let ni = (self.n_blocks as u64)
             .saturating_mul(self.elements_per_block as u64)
-            .saturating_add(2 * m);
-        let nj = self.elements_across as u64 + 2 * m;
+            .saturating_add(m.left as u64)
+            .saturating_add(m.right as u64);
+        let nj = (self.elements_across as u64)
+            .saturating_add(m.upstream as u64)
+            .saturating_add(m.downstream as u64);
         let nk = self.layers.saturating_add(self.rock_layers as u64);
         if [ni, nj, nk].iter().any(|&s| s > u32::MAX as u64) {
             return Err(MeshError::TooLarge {
@@ -131,13 +208,16 @@ impl BlockRow {
         Ok((ni, nj, nk))
     }
 
-    /// Elevations of the logical levels k: `rock_layers` equal layers over
-    /// `rock_depth` below `base`, then the concrete layer boundaries `layer_z`.
-    pub fn level_z(&self, base: f64, rock_depth: f64, layer_z: &[f64]) -> Vec<f64> {
+    /// Elevations of the logical levels k: `rock_layers` layers over
+    /// `rock_depth` below `base` (equal ones, or graded by `below` when it
+    /// is not uniform), then the concrete layer boundaries `layer_z`.
+    pub fn level_z(&self, base: f64, rock_depth: f64, below: Spacing, layer_z: &[f64]) -> Vec<f64> {
         let rl = self.rock_layers;
         (0..rl + layer_z.len())
             .map(|k| {
-                if k < rl {
+                if k < rl && below.ratio != 1.0 {
+                    base - below.distance(rl - k)
+                } else if k < rl {
                     base - rock_depth + rock_depth * k as f64 / rl as f64
                 } else {
                     layer_z[k - rl]
@@ -156,7 +236,7 @@ impl BlockRow {
         if k < rl {
             return Cell::Rock;
         }
-        if i < m || i >= m + self.n_blocks as usize * epb {
+        if i < m.left || i >= m.left + self.n_blocks as usize * epb {
             return if self.rock_beyond_abutments {
                 Cell::Rock
             } else {
@@ -164,10 +244,10 @@ impl BlockRow {
             };
         }
         let layer = (k - rl) as u32;
-        let b = (i - m) / epb;
+        let b = (i - m.left) / epb;
         if layer < blocks[b].0 {
             Cell::Rock
-        } else if j >= m && j < m + self.elements_across as usize {
+        } else if j >= m.upstream && j < m.upstream + self.elements_across as usize {
             Cell::Concrete {
                 block: b as u32 + 1,
                 layer,
@@ -195,8 +275,8 @@ impl BlockRow {
             nk,
             pos,
             cells,
-            j0: self.margin,
-            j1: self.margin + self.elements_across as usize,
+            j0: self.margin.upstream,
+            j1: self.margin.upstream + self.elements_across as usize,
             layers,
         })
     }
@@ -685,6 +765,18 @@ impl Grid {
     }
 }
 
+/// `rock_grading_ratio` in [1, 3]: 1 is uniform rock, above 3 the cells
+/// grow too fast for the rock's stresses and temperatures to be resolved.
+pub(crate) fn grading_ratio(r: f64) -> Result<(), MeshError> {
+    if !(r.is_finite() && (1.0..=3.0).contains(&r)) {
+        return Err(MeshError::param(
+            "rock_grading_ratio",
+            format!("must be in [1, 3] (1 = uniform rock), got {r}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Lifts per zone from the two heights; the error names `zone_height_m`.
 pub(crate) fn zone_lifts(lift_height: f64, zone_height: f64) -> Result<u32, MeshError> {
     if !(lift_height.is_finite() && lift_height > 0.0) {
@@ -710,4 +802,53 @@ pub(crate) fn zone_lifts(lift_height: f64, zone_height: f64) -> Result<u32, Mesh
         ));
     }
     Ok(n as u32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn graded_cells_follow_the_geometric_law() {
+        for (length, first, ratio) in [
+            (60.0, 3.0, 1.3),
+            (150.0, 4.2, 1.5),
+            (40.0, 3.0, 2.0),
+            (10.0, 3.0, 1.2),
+        ] {
+            let s = Spacing::graded(length, first, ratio);
+            let sizes: Vec<f64> = (0..s.count)
+                .map(|k| s.distance(k + 1) - s.distance(k))
+                .collect();
+            // first cell within (first/r, first]
+            assert!(
+                sizes[0] <= first * (1.0 + 1e-12) && sizes[0] > first / ratio,
+                "{sizes:?}"
+            );
+            // each cell r times the one before
+            for w in sizes.windows(2) {
+                assert!((w[1] / w[0] - ratio).abs() < 1e-12, "{sizes:?}");
+            }
+            // the margin exactly, and the count the least that does it
+            assert_eq!(s.distance(s.count), length);
+            assert_eq!(s.distance(0), 0.0);
+            let sum: f64 = sizes.iter().sum();
+            assert!((sum - length).abs() < 1e-12 * length);
+            let fewer = length * (ratio - 1.0) / (ratio.powi(s.count as i32 - 1) - 1.0);
+            assert!(
+                s.count == 1 || fewer > first,
+                "one cell fewer would start at {fewer}"
+            );
+        }
+        // a margin no wider than the first cell is one cell
+        assert_eq!(Spacing::graded(2.0, 3.0, 1.3).count, 1);
+    }
+
+    #[test]
+    fn uniform_spacing_keeps_the_first_versions_expression() {
+        let s = Spacing::uniform(3, 70.0);
+        for k in 0..=3 {
+            assert_eq!(s.distance(k).to_bits(), (70.0 * k as f64 / 3.0).to_bits());
+        }
+    }
 }

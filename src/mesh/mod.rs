@@ -51,7 +51,9 @@
 //!   [`SurfaceKind::Ground`], or [`SurfaceKind::Wet`] when they face upstream
 //!   (concrete η = −1 faces) or lie upstream of the dam (rock upstream of the
 //!   upstream face). Concrete faces on the bottom of a rock-less model are
-//!   `Far`. Lift tops and joint faces are internal, not surfaces.
+//!   `Far`. Lift tops and joint faces are internal, not surfaces. Which side
+//!   of the model a far face is on (base, upstream, downstream, left or
+//!   right bank) is read from the geometry by [`far`], for any mesh.
 //!
 //! See [`blocks`], [`arch`] and [`arch_table`] for the shapes.
 
@@ -60,6 +62,7 @@ pub mod arch_curves;
 pub mod arch_table;
 mod arch_table_read;
 pub mod blocks;
+pub mod far;
 pub mod geometry;
 mod grid;
 pub mod import;
@@ -75,6 +78,7 @@ use thiserror::Error;
 pub use arch::generate_arch;
 pub use arch_table::generate_arch_table;
 pub use blocks::generate_blocks;
+pub use far::{DamFrame, FarSide};
 pub use vtu::{write_pvd, write_vtu};
 
 /// Local faces of a hex8: the one table of `fem::hex8`.

@@ -15,6 +15,7 @@
 //! | `[joints]` | yes | `zone_height_m`, a whole number of lifts |
 //! | `[concrete]` | yes | `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `[concrete.adiabatic]` |
 //! | `[rock]` | when `geometry.rock_depth_m > 0` | rock properties and initial temperature |
+//! | `[boundary.<side>]` | no | per far side (`base`, `upstream`, `downstream`, `left_bank`, `right_bank`): `temperature_c` (absent = adiabatic) and `support` (`fixed` default, `rollers`, `free`) ([`Boundary`]) |
 //! | `[pipes]` | with `pipe_cooling` | cooling-pipe layout ([`PipeLayout`]) |
 //! | `[air]` | with `ambient` | annual air temperature and surface film coefficient |
 //! | `[reservoir]` | with `reservoir_temperature` | reservoir water temperature by depth |
@@ -33,6 +34,7 @@
 //! # Ok::<(), groutready::scene::SceneError>(())
 //! ```
 
+mod boundary;
 mod error;
 mod planner;
 pub mod preset;
@@ -47,6 +49,7 @@ use crate::material::{AdiabaticRise, AutogenousLaw, CreepLaw, ModulusLaw, PipeLa
 use crate::mesh::geometry::Geometry;
 use crate::vocab::{Epoch, Invalid};
 
+pub use boundary::{Boundary, FarFace, Support};
 pub use error::SceneError;
 pub use planner::PlannerSettings;
 pub use preset::Preset;
@@ -106,6 +109,10 @@ pub struct Scene {
     /// Foundation rock; required when `geometry.rock_depth_m > 0`.
     #[serde(default)]
     pub rock: Option<Rock>,
+    /// Far faces per side: fixed temperature or adiabatic, support
+    /// (`[boundary.<side>]`; default adiabatic and fixed everywhere).
+    #[serde(default, skip_serializing_if = "Boundary::is_default")]
+    pub boundary: Boundary,
     /// Cooling-pipe layout; required by `pipe_cooling`.
     #[serde(default)]
     pub pipes: Option<PipeLayout>,
@@ -246,6 +253,28 @@ pub struct Concrete {
     /// G(τ) = eps_inf·(1 − exp(−c τ^d)); required by `autogenous`.
     #[serde(default)]
     pub autogenous: Option<AutogenousLaw>,
+    /// The temperature a new lift's nodes shared with older concrete or
+    /// rock take at its pour: `keep` (default, the older material's) or
+    /// `placement` (the pour's placement temperature).
+    #[serde(default, skip_serializing_if = "SharedNodes::is_keep")]
+    pub placement_on_shared_nodes: SharedNodes,
+}
+
+/// `concrete.placement_on_shared_nodes` (see the thermal module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SharedNodes {
+    /// Shared nodes keep the temperature of the concrete or rock below.
+    #[default]
+    Keep,
+    /// Shared nodes take the new lift's placement temperature.
+    Placement,
+}
+
+impl SharedNodes {
+    fn is_keep(&self) -> bool {
+        *self == SharedNodes::Keep
+    }
 }
 
 /// `[rock]`: the foundation rock's thermal properties

@@ -39,6 +39,7 @@ pub(super) fn validate(s: &Scene) -> Check {
         }
     }
     time(&s.time, s)?;
+    boundary(s)?;
     if let Err(Invalid { key, message }) = s.solver.validate() {
         return Err(SceneError::invalid(&key, message));
     }
@@ -448,6 +449,7 @@ fn blocks(g: &BlocksGeometry, s: &Scene) -> Check {
     at_least_one("geometry.rock_layers", g.rock_layers)?;
     non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
     at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
+    grading_ratio(g.rock_grading_ratio)?;
     finite("geometry.base_elevation_m", g.base_elevation_m)?;
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
@@ -509,6 +511,7 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
     at_least_one("geometry.rock_layers", g.rock_layers)?;
     non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
     at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
+    grading_ratio(g.rock_grading_ratio)?;
     if whole_multiple(g.height_m, s.lifts.height_m).is_none() {
         return Err(SceneError::invalid(
             "geometry.height_m",
@@ -668,6 +671,45 @@ fn mechanical(s: &Scene) -> Check {
         }
         if let Some(a) = r.expansion_per_c {
             finite("rock.expansion_per_c", a)?;
+        }
+    }
+    Ok(())
+}
+
+/// `geometry.rock_grading_ratio` in [1, 3] (the generators' own limit).
+fn grading_ratio(r: f64) -> Check {
+    let key = "geometry.rock_grading_ratio";
+    finite(key, r)?;
+    if !(1.0..=3.0).contains(&r) {
+        return Err(SceneError::invalid(
+            key,
+            format!("{key} must be in [1, 3] (1 = uniform rock), got {r}"),
+        ));
+    }
+    Ok(())
+}
+
+/// `[boundary.<side>]`: finite temperatures; rollers only where the far
+/// faces are plane and normal to x, y or z, which the arch's rock sides
+/// are not (its upstream and downstream faces follow the rings, its
+/// abutment faces the last joint planes).
+fn boundary(s: &Scene) -> Check {
+    for side in crate::mesh::FarSide::ALL {
+        let face = s.boundary.side(side);
+        if let Some(t) = face.temperature_c {
+            finite(&format!("boundary.{side}.temperature_c"), t)?;
+        }
+        let arch = matches!(s.geometry, Geometry::Arch(_));
+        if arch && side != crate::mesh::FarSide::Base && face.support == super::Support::Rollers {
+            let key = format!("boundary.{side}.support");
+            return Err(SceneError::invalid(
+                &key,
+                format!(
+                    "{key} = \"rollers\" needs far faces normal to x, y or z, but the arch's \
+                     {side} rock face is curved or oblique (use \"fixed\" or \"free\"; rollers \
+                     hold on the base)"
+                ),
+            ));
         }
     }
     Ok(())

@@ -200,7 +200,7 @@ impl<'a> Simulation<'a> {
             Some(MechanicsModel::new(
                 mesh,
                 &crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?,
-                &Supports::far_boundary(mesh),
+                &Supports::for_sides(mesh, &scene.boundary.supports()).map_err(MechError::from)?,
             )?)
         } else {
             None

@@ -479,7 +479,7 @@ pub fn full_dam_mechanics_step_cost(
     let mut m = crate::mechanics::MechanicsModel::new(
         mesh,
         &settings,
-        &crate::mechanics::Supports::far_boundary(mesh),
+        &crate::mechanics::Supports::for_sides(mesh, &scene.boundary.supports())?,
     )?;
     for (block, lift) in all_lifts(mesh) {
         m.pour(block, lift, 0.0);

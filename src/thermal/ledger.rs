@@ -1,6 +1,6 @@
 //! Heat bookkeeping of a run: every joule that enters or leaves the live
 //! concrete and rock, so a test can prove
-//!   E(end) − E(start) = births + hydration + pipes + air + water
+//!   E(end) − E(start) = births + hydration + pipes + air + water + far
 //! to round-off, with E = Σ c_i T_i (lumped nodal capacities, J).
 
 use serde::{Deserialize, Serialize};
@@ -19,10 +19,13 @@ pub struct HeatLedger {
     pub air: f64,
     /// Heat through submerged (prescribed-temperature) nodes [J].
     pub water: f64,
+    /// Heat through far faces held at a fixed temperature (`[boundary]`) [J].
+    #[serde(default)]
+    pub far: f64,
 }
 
 impl HeatLedger {
     pub fn inflow(&self) -> f64 {
-        self.births + self.hydration + self.pipes + self.air + self.water
+        self.births + self.hydration + self.pipes + self.air + self.water + self.far
     }
 }

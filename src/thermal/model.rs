@@ -137,6 +137,9 @@ pub struct ThermalModel {
     air: Option<AirTemperature>,
     water: Option<Water>,
     surface_kind: BTreeMap<(u32, u8), SurfaceKind>,
+    /// Per thermal dof, the fixed temperature of the far side it lies on
+    /// (`[boundary]`); empty when every far side is adiabatic.
+    far_fixed: Vec<Option<f64>>,
     dof_z: Vec<f64>,
     dof_xyz: Vec<[f64; 3]>,
     lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
@@ -198,6 +201,7 @@ impl ThermalModel {
             air: air.filter(|_| settings.ambient),
             water: water.filter(|_| settings.reservoir_temperature),
             surface_kind,
+            far_fixed: far_fixed(mesh, &settings.far_temperature_c),
             dof_z,
             dof_xyz,
             lift_elems: mesh.lift_elements(),
@@ -268,7 +272,29 @@ impl ThermalModel {
             .cloned()
             .unwrap_or_default();
         self.lift_pour_day.insert((block, lift), day);
-        self.birth(&elems, |_| placement_c);
+        if self.settings.placement_on_shared_nodes {
+            self.birth_resetting(&elems, placement_c);
+        } else {
+            self.birth(&elems, |_| placement_c);
+        }
+    }
+
+    /// Makes `elems` live with every one of their dofs at `placement_c`,
+    /// those shared with live elements included; the births' heat is the
+    /// change of the stored heat, so the ledger stays exact.
+    fn birth_resetting(&mut self, elems: &[u32], placement_c: f64) {
+        let before = self.stored_heat();
+        for &e in elems {
+            for &d in &self.data.dofs[e as usize] {
+                self.state.temperature[d as usize] = placement_c;
+            }
+        }
+        for &e in elems {
+            self.state.live[e as usize] = true;
+            self.faces.add_element(e, &self.data.dofs[e as usize]);
+        }
+        self.state.ledger.births += self.stored_heat() - before;
+        self.dirty = true;
     }
 
     /// Starts the stages that begin on `day` and ends those that end on `day`.
@@ -550,6 +576,26 @@ impl ThermalModel {
         self.air.as_ref().map(|a| a.film_w_m2k() * SECONDS_PER_DAY)
     }
 
+    /// Prescribed temperatures at `day` on the live system: the water's on
+    /// the submerged wet-face nodes, then the far sides' fixed ones (which
+    /// win on a node both hold: the model's edge is the user's choice).
+    /// Returns (fixed, value, far) per live dof, `far` marking the rows the
+    /// far sides hold.
+    fn prescribed_nodes(&self, day: f64) -> (Vec<bool>, Vec<f64>, Vec<bool>) {
+        let (mut fixed, mut value) = self.water_nodes(day);
+        let mut far = vec![false; fixed.len()];
+        if !self.far_fixed.is_empty() {
+            for (i, &d) in self.sys.dofs.iter().enumerate() {
+                if let Some(t) = self.far_fixed[d as usize] {
+                    fixed[i] = true;
+                    value[i] = t;
+                    far[i] = true;
+                }
+            }
+        }
+        (fixed, value, far)
+    }
+
     /// Prescribed water temperatures at `day` on the submerged wet-face nodes
     /// of the live system.
     fn water_nodes(&self, day: f64) -> (Vec<bool>, Vec<f64>) {
@@ -581,7 +627,7 @@ impl ThermalModel {
     /// closed at t1.
     pub fn step(&mut self, t0: f64, t1: f64) -> Result<(), ThermalError> {
         let dt = step_length(t0, t1);
-        let fixed_value = self.prepare_system(t1, dt)?;
+        let (fixed_value, far_rows) = self.prepare_system(t1, dt)?;
         let sources = self.sources(t0, t1);
         self.stats.pipe_terms += sources.pipe_terms;
         let (rhs, b) = self.right_hand_side(t0, t1, &sources.q, &fixed_value);
@@ -592,7 +638,7 @@ impl ThermalModel {
         if x.iter().any(|v| !v.is_finite()) {
             return Err(ThermalError::NonFinite { day: t1 });
         }
-        let (air_heat, water_heat) = self.boundary_heat(&rhs, &x, t1, dt)?;
+        let (air_heat, water_heat, far_heat) = self.boundary_heat(&rhs, &x, &far_rows, t1, dt)?;
 
         for (i, &d) in self.sys.dofs.iter().enumerate() {
             self.state.temperature[d as usize] = x[i];
@@ -602,6 +648,7 @@ impl ThermalModel {
         ledger.pipes += sources.pipes;
         ledger.air += air_heat;
         ledger.water += water_heat;
+        ledger.far += far_heat;
         self.stats.steps += 1;
         self.end_stages_at_target(t1);
         Ok(())
@@ -609,19 +656,20 @@ impl ThermalModel {
 
     /// Brings the live system up to the step ending at `day`: renumbered
     /// after births, its boundary matrix reassembled when the submerged set
-    /// changes. Returns the prescribed water temperature per live dof.
-    fn prepare_system(&mut self, day: f64, dt: f64) -> Result<Vec<f64>, ThermalError> {
+    /// changes. Returns the prescribed temperature per live dof and which
+    /// rows the far sides hold.
+    fn prepare_system(&mut self, day: f64, dt: f64) -> Result<(Vec<f64>, Vec<bool>), ThermalError> {
         if self.dirty {
             self.rebuild()
                 .map_err(|source| ThermalError::Solve { day, dt, source })?;
             self.assemble_boundary(day)?;
         }
-        let (fixed, fixed_value) = self.water_nodes(day);
+        let (fixed, fixed_value, far) = self.prescribed_nodes(day);
         if fixed != self.sys.fixed {
             self.sys.fixed = fixed;
             self.assemble_boundary(day)?;
         }
-        Ok(fixed_value)
+        Ok((fixed_value, far))
     }
 
     /// Reassembles K + H_air of the live system for its exposed faces and
@@ -803,15 +851,17 @@ impl ThermalModel {
     }
 
     /// Checks the solution `x` against the unmodified equations and returns
-    /// the heat gained from the air and from the water over the step [J]
-    /// (the water's from the reactions of the fixed rows).
+    /// the heat gained from the air, from the water and through the fixed
+    /// far sides over the step [J] (the last two from the reactions of the
+    /// fixed rows, split by `far_rows`).
     fn boundary_heat(
         &self,
         rhs: &StepRhs,
         x: &[f64],
+        far_rows: &[bool],
         day: f64,
         dt: f64,
-    ) -> Result<(f64, f64), ThermalError> {
+    ) -> Result<(f64, f64, f64), ThermalError> {
         let (sys, theta) = (&self.sys, self.settings.theta);
         let n = sys.n();
         // Residual of the unmodified equations on free rows; reactions on fixed rows:
@@ -820,10 +870,12 @@ impl ThermalModel {
         sys.cap_mul(x, &mut c_new);
         let mut kh_new = vec![0.0; n];
         sys.kh.mul_vec(x, &mut kh_new);
-        let (mut res2, mut ref2, mut water_heat) = (0.0, 0.0, 0.0);
+        let (mut res2, mut ref2, mut water_heat, mut far_heat) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..n {
             let r = c_new[i] + theta * dt * kh_new[i] - rhs.full[i];
-            if sys.fixed[i] {
+            if far_rows[i] {
+                far_heat += r;
+            } else if sys.fixed[i] {
                 water_heat += r;
             } else {
                 res2 += r * r;
@@ -840,7 +892,7 @@ impl ThermalModel {
             .map(|i| theta * kh_new[i] + (1.0 - theta) * rhs.kh_t[i])
             .sum();
         let air_heat = dt * rhs.ta * sys.air_load.iter().sum::<f64>() - dt * kh_theta_sum;
-        Ok((air_heat, water_heat))
+        Ok((air_heat, water_heat, far_heat))
     }
 
     /// Ends the stages whose region has fallen to its target by `day`; arms
@@ -929,6 +981,31 @@ struct StepRhs {
     kh_t: Vec<f64>,
     /// C T0 − (1−θ)Δt KH T0 + Δt f_θ + Q, the prescribed rows included
     full: Vec<f64>,
+}
+
+/// Per thermal dof, the fixed temperature of the far side its node is on
+/// (`temperatures` in [`crate::mesh::FarSide::ALL`] order); a node on two fixed sides
+/// takes the first of them in that order. Empty when no side is fixed, so
+/// a scene without `[boundary]` never classifies a face.
+fn far_fixed(mesh: &Mesh, temperatures: &[Option<f64>; 5]) -> Vec<Option<f64>> {
+    if temperatures.iter().all(Option::is_none) {
+        return Vec::new();
+    }
+    let mut side_of = vec![usize::MAX; mesh.n_thermal_dofs];
+    for (f, side) in mesh.far_sides() {
+        let side = side.index();
+        if temperatures[side].is_none() {
+            continue;
+        }
+        for &k in &crate::fem::hex8::FACES[f.face as usize] {
+            let d = mesh.thermal_dof[mesh.elements[f.elem as usize][k] as usize] as usize;
+            side_of[d] = side_of[d].min(side);
+        }
+    }
+    side_of
+        .into_iter()
+        .map(|s| temperatures.get(s).copied().flatten())
+        .collect()
 }
 
 /// Moves prescribed values to the right-hand side, b_free −= A_{free,fixed}

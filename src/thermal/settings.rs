@@ -53,6 +53,13 @@ pub struct ThermalSettings {
     pub pcg_tolerance: f64,
     /// PCG iterations after which a step fails.
     pub pcg_max_iterations: usize,
+    /// Fixed temperature [°C] of each far side, in
+    /// [`FarSide::ALL`](crate::mesh::FarSide::ALL) order; `None` = adiabatic.
+    pub far_temperature_c: [Option<f64>; 5],
+    /// A pour resets the nodes its lift shares with live concrete or rock
+    /// to the placement temperature (`concrete.placement_on_shared_nodes =
+    /// "placement"`); false keeps theirs (default).
+    pub placement_on_shared_nodes: bool,
 }
 
 impl ThermalSettings {
@@ -60,8 +67,9 @@ impl ThermalSettings {
     /// specific heat, conductivity, `adiabatic`), `[rock]` (the same three,
     /// `initial_temp_c`, `gradient_c_per_m`), `[pipes]`, `effects`
     /// (`hydration`, `pipe_cooling`, `ambient`, `reservoir_temperature`),
-    /// `[time]` (`theta`, `capacity`) and `[solver]` (`thermal`,
-    /// `pcg_tolerance`, `pcg_max_iterations`). Every one of them is either
+    /// `[time]` (`theta`, `capacity`), `[solver]` (`thermal`,
+    /// `pcg_tolerance`, `pcg_max_iterations`) and `[boundary]` (the far
+    /// sides' `temperature_c`). Every one of them is either
     /// required by the scene or has its default there; an effect without its
     /// table (refused by the scene's validation) is off.
     pub fn from_scene(scene: &Scene) -> ThermalSettings {
@@ -99,6 +107,9 @@ impl ThermalSettings {
             solver: scene.solver.thermal,
             pcg_tolerance: scene.solver.pcg_tolerance,
             pcg_max_iterations: scene.solver.pcg_max_iterations as usize,
+            far_temperature_c: scene.boundary.temperatures(),
+            placement_on_shared_nodes: c.placement_on_shared_nodes
+                == crate::scene::SharedNodes::Placement,
         }
     }
 }

@@ -13,6 +13,7 @@ mod contact_qp;
 mod contact_solvers_agree;
 mod damaged_restart;
 mod demo_plan;
+mod far_boundary;
 mod fast_path;
 mod fem_elasticity;
 mod fem_elements;

@@ -23,6 +23,7 @@ fn blocks_geom(n_blocks: u32) -> BlocksGeometry {
         rock_layers: 1,
         rock_margin_m: 0.0,
         rock_margin_elements: 1,
+        rock_grading_ratio: 1.0,
         base_elevation_m: 100.0,
     }
 }
@@ -48,6 +49,7 @@ fn demo_arch() -> ArchGeometry {
         rock_layers: 2,
         rock_margin_m: 60.0,
         rock_margin_elements: 1,
+        rock_grading_ratio: 1.0,
     }
 }
 
@@ -72,6 +74,7 @@ fn large_arch() -> ArchGeometry {
         rock_layers: 3,
         rock_margin_m: 150.0,
         rock_margin_elements: 1,
+        rock_grading_ratio: 1.0,
     }
 }
 
@@ -399,6 +402,7 @@ fn blocks_volume_layers_and_zones() {
         rock_layers: 3,
         rock_margin_m: 20.0,
         rock_margin_elements: 2,
+        rock_grading_ratio: 1.0,
         base_elevation_m: 0.0,
     };
     let m = generate_blocks(&g, 1.5, 4.5).unwrap();

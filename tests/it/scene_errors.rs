@@ -118,7 +118,7 @@ fn unknown_key() {
     assert_eq!(
         err(&text),
         "models/x.toml:23:1: unknown key `conductivty` in [concrete], expected one of \
-         `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `adiabatic`, `modulus`, `poisson`, `expansion_per_c`, `creep`, `autogenous`"
+         `density_kg_m3`, `specific_heat_j_kgk`, `conductivity_w_mk`, `adiabatic`, `modulus`, `poisson`, `expansion_per_c`, `creep`, `autogenous`, `placement_on_shared_nodes`"
     );
 }
 

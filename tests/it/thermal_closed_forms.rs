@@ -708,3 +708,38 @@ fn a_water_change_inside_a_stage_follows_zhu_superposition() {
         10.0 + (t_place - 10.0) * pipe.phi(60.0) + hydration_under_cooling(&pipe, &rise, 0.0, 60.0);
     assert!(warmer - exact(60.0) > 2.0, "{} vs {}", warmer, exact(60.0));
 }
+
+/// The staged run with a far base held at 10 °C and pours resetting their
+/// shared nodes still balances its heat: the base's reactions are
+/// `ledger.far`, the resets part of `ledger.births`.
+#[test]
+fn staged_run_with_a_fixed_far_base_and_reset_shared_nodes_balances_heat() {
+    let mut runs = vec![];
+    for reset in [false, true] {
+        let mut sc =
+            staged_scene("\"hydration\", \"pipe_cooling\", \"ambient\", \"reservoir_temperature\"");
+        sc.boundary.base.temperature_c = Some(10.0);
+        if reset {
+            sc.concrete.placement_on_shared_nodes = groutready::scene::SharedNodes::Placement;
+        }
+        let mesh = blocks_mesh(&sc);
+        let mut sim = Simulation::new(&sc, &mesh, &staged_schedules()).unwrap();
+        sim.run(None, &mut |_, _| {}).unwrap();
+        let th = sim.thermal.as_ref().unwrap();
+        let l = th.state.ledger;
+        let scale =
+            l.births.abs() + l.hydration.abs() + l.pipes.abs() + l.air.abs() + l.water.abs();
+        let imbalance = (th.stored_heat() - l.inflow()).abs() / scale;
+        assert!(
+            imbalance < 1e-12,
+            "reset {reset}: imbalance {imbalance:.2e}, {l:?}"
+        );
+        // the base at 10 °C under rock at 16 °C and more draws heat out
+        assert!(l.far < 0.0, "{l:?}");
+        runs.push(th.lift_mean(1, 1).unwrap());
+    }
+    assert!(
+        runs[0] != runs[1],
+        "resetting the shared nodes changed nothing: {runs:?}"
+    );
+}
