@@ -36,7 +36,9 @@ pub enum AppError {
     #[error(transparent)]
     MeshFile(#[from] crate::mesh::import::MeshFileError),
     /// The mesh file differs from the one the scene (or run folder) was made with.
-    #[error("{0}: the mesh file has changed since the scene was loaded (plan again with the new file)")]
+    #[error(
+        "{0}: the mesh file has changed since the scene was loaded (plan again with the new file)"
+    )]
     MeshChanged(String),
     #[error("{0}: no schedules folder: give --schedules DIR or set `schedules` in the scene")]
     NoSchedules(String),

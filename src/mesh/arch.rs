@@ -212,8 +212,20 @@ pub(super) struct RowCounts {
     pub n_layers: usize,
 }
 
-/// The grid of an arch and the spacing of its rock.
+/// The grid of an arch and the spacing of its rock, its counts checked
+/// first (both arch generators' keys of the same names).
 pub(super) fn block_row(c: &RowCounts) -> Result<(BlockRow, RockSpacing), MeshError> {
+    at_least("elements_per_block", c.elements_per_block, 1)?;
+    at_least("elements_across", c.elements_across, 1)?;
+    non_negative("rock_depth_m", c.rock_depth_m)?;
+    non_negative("rock_margin_m", c.rock_margin_m)?;
+    if c.rock_depth_m > 0.0 {
+        at_least("rock_layers", c.rock_layers, 1)?;
+    }
+    if c.rock_margin_m > 0.0 {
+        at_least("rock_margin_elements", c.rock_margin_elements, 1)?;
+    }
+    grid::grading_ratio(c.rock_grading_ratio)?;
     let rock = RockSpacing::of(c);
     let row = BlockRow {
         n_blocks: c.n_blocks,
@@ -261,17 +273,6 @@ fn check_params(p: &ArchGeometry, lift_height: f64, zone_height: f64) -> Result<
         "min_block_height_fraction",
         || format!("must be in (0, 1], got {}", p.min_block_height_fraction),
     )?;
-    at_least("elements_per_block", p.elements_per_block, 1)?;
-    at_least("elements_across", p.elements_across, 1)?;
-    non_negative("rock_depth_m", p.rock_depth_m)?;
-    non_negative("rock_margin_m", p.rock_margin_m)?;
-    if p.rock_depth_m > 0.0 {
-        at_least("rock_layers", p.rock_layers, 1)?;
-    }
-    if p.rock_margin_m > 0.0 {
-        at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
-    }
-    grid::grading_ratio(p.rock_grading_ratio)?;
     grid::zone_lifts(lift_height, zone_height)
 }
 

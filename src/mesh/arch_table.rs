@@ -91,7 +91,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arch::{self, Across, ArchPlan, RowCounts};
 use super::arch_curves::{ArchType, HalfArch, HalfCurve};
-use super::geometry::{at_least, check, is_one, non_negative, one, one_f, positive, two};
+use super::geometry::{at_least, check, is_one, one, one_f, positive, two};
 use super::grid::{self, Layers};
 use super::{Mesh, MeshError};
 
@@ -320,7 +320,8 @@ pub fn generate_arch_table(
         rock_grading_ratio: g.rock_grading_ratio,
         first_cells_m: [
             g.crest_length_m / (g.n_blocks as f64 * g.elements_per_block as f64),
-            (base_row.crown_downstream_y_m - base_row.crown_upstream_y_m) / g.elements_across as f64,
+            (base_row.crown_downstream_y_m - base_row.crown_upstream_y_m)
+                / g.elements_across as f64,
             lift_height,
         ],
         n_layers,
@@ -410,17 +411,6 @@ fn check_params(
         )?;
     }
     positive("thickness_exponent", g.thickness_exponent)?;
-    at_least("elements_per_block", g.elements_per_block, 1)?;
-    at_least("elements_across", g.elements_across, 1)?;
-    non_negative("rock_depth_m", g.rock_depth_m)?;
-    non_negative("rock_margin_m", g.rock_margin_m)?;
-    if g.rock_depth_m > 0.0 {
-        at_least("rock_layers", g.rock_layers, 1)?;
-    }
-    if g.rock_margin_m > 0.0 {
-        at_least("rock_margin_elements", g.rock_margin_elements, 1)?;
-    }
-    grid::grading_ratio(g.rock_grading_ratio)?;
     grid::zone_lifts(lift_height, zone_height)
 }
 

@@ -95,14 +95,30 @@ fn a_gmsh_mesh_runs_and_agrees_with_the_blocks_generator() {
     std::fs::write(&scene, mesh_scene(&twin, &fixture, "three_blocks.msh")).unwrap();
 
     let run = |scene: &Path, out: &Path| {
-        let o = bin().arg("run").arg(scene).arg("--out").arg(out).output().unwrap();
+        let o = bin()
+            .arg("run")
+            .arg(scene)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
     let from_gmsh = run(&scene, &dir.path().join("gmsh"));
-    let from_generator = run(&fixture.join("three_blocks.toml"), &dir.path().join("generator"));
+    let from_generator = run(
+        &fixture.join("three_blocks.toml"),
+        &dir.path().join("generator"),
+    );
     // Same size of model: 96 elements, 189 thermal dofs.
-    let first = |s: &str| s.lines().next().unwrap_or("").split(": ").nth(1).map(str::to_string);
+    let first = |s: &str| {
+        s.lines()
+            .next()
+            .unwrap_or("")
+            .split(": ")
+            .nth(1)
+            .map(str::to_string)
+    };
     assert_eq!(first(&from_gmsh), first(&from_generator));
 
     let a = apertures(&dir.path().join("gmsh/apertures.csv"));
@@ -124,13 +140,25 @@ fn a_gmsh_mesh_runs_and_agrees_with_the_blocks_generator() {
 
 /// `groutready mesh SCENE --out FILE`, asserting success.
 fn write_mesh(scene: &Path, out: &Path) {
-    let o = bin().arg("mesh").arg(scene).arg("--out").arg(out).output().unwrap();
+    let o = bin()
+        .arg("mesh")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// `groutready run SCENE --out DIR`, asserting success.
 fn run_scene(scene: &Path, out: &Path) {
-    let o = bin().arg("run").arg(scene).arg("--out").arg(out).output().unwrap();
+    let o = bin()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
@@ -158,10 +186,17 @@ fn written_meshes_run_as_mesh_scenes_with_the_same_apertures() {
         write_mesh(&twin_path, &dir.path().join(&file));
         let scene = dir.path().join(format!("three_blocks_{ext}.toml"));
         std::fs::write(&scene, mesh_scene(&twin, &fixture, &file)).unwrap();
-        assert_eq!(fields(&scene_mesh(&scene)), fields(&scene_mesh(&twin_path)), "{ext}");
+        assert_eq!(
+            fields(&scene_mesh(&scene)),
+            fields(&scene_mesh(&twin_path)),
+            "{ext}"
+        );
         run_scene(&scene, &dir.path().join(ext));
         let got = std::fs::read(dir.path().join(ext).join("apertures.csv")).unwrap();
-        assert!(got == want, "apertures.csv through .{ext} differs from the generator's");
+        assert!(
+            got == want,
+            "apertures.csv through .{ext} differs from the generator's"
+        );
     }
 }
 
@@ -178,7 +213,10 @@ fn the_small_dam_and_the_demo_come_back_from_their_files() {
             write_mesh(&path, &dir.path().join(&file));
             let scene = dir.path().join(format!("dam_{ext}.toml"));
             std::fs::write(&scene, mesh_scene(&text, &schedules, &file)).unwrap();
-            assert!(fields(&scene_mesh(&scene)) == generated, "{model} through .{ext}");
+            assert!(
+                fields(&scene_mesh(&scene)) == generated,
+                "{model} through .{ext}"
+            );
         }
     }
 }
@@ -204,5 +242,8 @@ fn a_run_folder_of_a_mesh_scene_finds_its_file_and_sees_it_change() {
     let err = groutready::app::build_mesh(&scene, &elsewhere.display().to_string())
         .unwrap_err()
         .to_string();
-    assert!(err.contains("three_blocks.msh: the mesh file has changed"), "{err}");
+    assert!(
+        err.contains("three_blocks.msh: the mesh file has changed"),
+        "{err}"
+    );
 }
