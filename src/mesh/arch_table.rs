@@ -26,7 +26,7 @@
 //!   reference line from its left end, increasing distances covering
 //!   [0, crest length], elevations within [base, crest]; linear between rows.
 //!
-//! Both files are read by [`crate::scene::Scene::load`] into
+//! Both files are read by `Scene::load` (the scene module) into
 //! [`ArchTableGeometry::tables`], so the scene kept in a run folder (and its
 //! fingerprint) carries the tables themselves.
 //!
@@ -147,7 +147,7 @@ pub struct ArchTableGeometry {
     /// graded from the concrete cells' sizes (module doc of [`super::arch`]).
     #[serde(default = "one_f", skip_serializing_if = "is_one")]
     pub rock_grading_ratio: f64,
-    /// The two tables as read by [`crate::scene::Scene::load`]; never
+    /// The two tables as read by `Scene::load` (the scene module); never
     /// written in a scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tables: Option<ArchTables>,
