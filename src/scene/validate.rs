@@ -455,15 +455,7 @@ fn blocks(g: &BlocksGeometry, s: &Scene) -> Check {
 }
 
 fn arch(g: &ArchGeometry, s: &Scene) -> Check {
-    if g.n_blocks < 2 {
-        return Err(SceneError::invalid(
-            "geometry.n_blocks",
-            format!(
-                "geometry.n_blocks must be >= 2 for an arch, got {}",
-                g.n_blocks
-            ),
-        ));
-    }
+    arch_blocks(g.n_blocks)?;
     positive("geometry.height_m", g.height_m)?;
     finite("geometry.base_elevation_m", g.base_elevation_m)?;
     positive("geometry.crest_radius_m", g.crest_radius_m)?;
@@ -505,13 +497,15 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
         1.0,
         true,
     )?;
-    at_least_one("geometry.elements_per_block", g.elements_per_block)?;
-    at_least_one("geometry.elements_across", g.elements_across)?;
-    non_negative("geometry.rock_depth_m", g.rock_depth_m)?;
-    at_least_one("geometry.rock_layers", g.rock_layers)?;
-    non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
-    at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
-    grading_ratio(g.rock_grading_ratio)?;
+    arch_counts(&ArchCounts {
+        elements_per_block: g.elements_per_block,
+        elements_across: g.elements_across,
+        rock_depth_m: g.rock_depth_m,
+        rock_layers: g.rock_layers,
+        rock_margin_m: g.rock_margin_m,
+        rock_margin_elements: g.rock_margin_elements,
+        rock_grading_ratio: g.rock_grading_ratio,
+    })?;
     if whole_multiple(g.height_m, s.lifts.height_m).is_none() {
         return Err(SceneError::invalid(
             "geometry.height_m",
@@ -533,18 +527,42 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
 
+/// An arch has joints: at least two blocks.
+fn arch_blocks(n_blocks: u32) -> Check {
+    if n_blocks < 2 {
+        return Err(SceneError::invalid(
+            "geometry.n_blocks",
+            format!("geometry.n_blocks must be >= 2 for an arch, got {n_blocks}"),
+        ));
+    }
+    Ok(())
+}
+
+/// The element and rock counts both arch kinds have, under the same keys.
+struct ArchCounts {
+    elements_per_block: u32,
+    elements_across: u32,
+    rock_depth_m: f64,
+    rock_layers: u32,
+    rock_margin_m: f64,
+    rock_margin_elements: u32,
+    rock_grading_ratio: f64,
+}
+
+fn arch_counts(c: &ArchCounts) -> Check {
+    at_least_one("geometry.elements_per_block", c.elements_per_block)?;
+    at_least_one("geometry.elements_across", c.elements_across)?;
+    non_negative("geometry.rock_depth_m", c.rock_depth_m)?;
+    at_least_one("geometry.rock_layers", c.rock_layers)?;
+    non_negative("geometry.rock_margin_m", c.rock_margin_m)?;
+    at_least_one("geometry.rock_margin_elements", c.rock_margin_elements)?;
+    grading_ratio(c.rock_grading_ratio)
+}
+
 /// The scalar keys of an `arch_table` geometry (its CSV tables are checked
 /// when [`Scene::load`] reads them).
 fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
-    if g.n_blocks < 2 {
-        return Err(SceneError::invalid(
-            "geometry.n_blocks",
-            format!(
-                "geometry.n_blocks must be >= 2 for an arch, got {}",
-                g.n_blocks
-            ),
-        ));
-    }
+    arch_blocks(g.n_blocks)?;
     finite("geometry.base_elevation_m", g.base_elevation_m)?;
     finite("geometry.crest_elevation_m", g.crest_elevation_m)?;
     let height = g.crest_elevation_m - g.base_elevation_m;
@@ -594,12 +612,15 @@ fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
         }
     }
     positive("geometry.thickness_exponent", g.thickness_exponent)?;
-    at_least_one("geometry.elements_per_block", g.elements_per_block)?;
-    at_least_one("geometry.elements_across", g.elements_across)?;
-    non_negative("geometry.rock_depth_m", g.rock_depth_m)?;
-    at_least_one("geometry.rock_layers", g.rock_layers)?;
-    non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
-    at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
+    arch_counts(&ArchCounts {
+        elements_per_block: g.elements_per_block,
+        elements_across: g.elements_across,
+        rock_depth_m: g.rock_depth_m,
+        rock_layers: g.rock_layers,
+        rock_margin_m: g.rock_margin_m,
+        rock_margin_elements: g.rock_margin_elements,
+        rock_grading_ratio: g.rock_grading_ratio,
+    })?;
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
 
