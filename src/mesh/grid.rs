@@ -751,17 +751,7 @@ impl Grid {
     }
 
     fn block_infos(&self) -> Vec<BlockInfo> {
-        self.layers
-            .blocks
-            .iter()
-            .enumerate()
-            .map(|(b, &(base, n_lifts))| BlockInfo {
-                block: b as u32 + 1,
-                n_lifts,
-                base_layer: base,
-                foundation_z: self.layers.z[base as usize],
-            })
-            .collect()
+        super::block_infos(&self.layers.blocks, &self.layers.z)
     }
 }
 

@@ -156,6 +156,21 @@ pub struct BlockInfo {
     pub foundation_z: f64,
 }
 
+/// The block infos of per-block (base layer, lifts), numbered from 1, each
+/// founded at its base layer's elevation in `layer_z` (both mesh builders).
+pub(crate) fn block_infos(blocks: &[(u32, u32)], layer_z: &[f64]) -> Vec<BlockInfo> {
+    blocks
+        .iter()
+        .enumerate()
+        .map(|(b, &(base, n_lifts))| BlockInfo {
+            block: b as u32 + 1,
+            n_lifts,
+            base_layer: base,
+            foundation_z: layer_z[base as usize],
+        })
+        .collect()
+}
+
 /// One pair of facing joint quads (one composite joint element).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FacePair {

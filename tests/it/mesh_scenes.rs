@@ -94,17 +94,7 @@ fn a_gmsh_mesh_runs_and_agrees_with_the_blocks_generator() {
     let scene = dir.path().join("three_blocks_gmsh.toml");
     std::fs::write(&scene, mesh_scene(&twin, &fixture, "three_blocks.msh")).unwrap();
 
-    let run = |scene: &Path, out: &Path| {
-        let o = bin()
-            .arg("run")
-            .arg(scene)
-            .arg("--out")
-            .arg(out)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        String::from_utf8_lossy(&o.stdout).into_owned()
-    };
+    let run = |scene: &Path, out: &Path| groutready("run", scene, out);
     let from_gmsh = run(&scene, &dir.path().join("gmsh"));
     let from_generator = run(
         &fixture.join("three_blocks.toml"),
@@ -138,28 +128,27 @@ fn a_gmsh_mesh_runs_and_agrees_with_the_blocks_generator() {
     assert!(worst <= 1e-4, "largest aperture difference {worst} mm");
 }
 
-/// `groutready mesh SCENE --out FILE`, asserting success.
-fn write_mesh(scene: &Path, out: &Path) {
+/// `groutready COMMAND SCENE --out OUT`, asserting success; its stdout.
+fn groutready(command: &str, scene: &Path, out: &Path) -> String {
     let o = bin()
-        .arg("mesh")
+        .arg(command)
         .arg(scene)
         .arg("--out")
         .arg(out)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-/// `groutready run SCENE --out DIR`, asserting success.
+/// `groutready mesh SCENE --out FILE`.
+fn write_mesh(scene: &Path, out: &Path) {
+    groutready("mesh", scene, out);
+}
+
+/// `groutready run SCENE --out DIR`.
 fn run_scene(scene: &Path, out: &Path) {
-    let o = bin()
-        .arg("run")
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    groutready("run", scene, out);
 }
 
 /// The scene's own mesh, from its generator or its file.

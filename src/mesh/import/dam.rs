@@ -68,8 +68,8 @@ use thiserror::Error;
 use super::RawMesh;
 use crate::fem::quad4;
 use crate::mesh::{
-    grid, hex_jacobian_det, BlockInfo, FacePair, Mesh, MeshError, Part, SurfaceFace, SurfaceKind,
-    Zone, ZoneSite, HEX_FACES,
+    grid, hex_jacobian_det, FacePair, Mesh, MeshError, Part, SurfaceFace, SurfaceKind, Zone,
+    ZoneSite, HEX_FACES,
 };
 use crate::vocab::ZonePoint;
 
@@ -139,17 +139,7 @@ pub fn build(raw: &RawMesh, lift_height: f64, zone_height: f64) -> Result<Mesh, 
     let zones = dam.zones(&face_pairs, &layers.z, per_zone)?;
     let zone_points = zone_points(&zones, &face_pairs, &layers.z, per_zone, &num.nodes);
     let surfaces = dam.surfaces(&adj);
-    let blocks = lifts
-        .blocks
-        .iter()
-        .enumerate()
-        .map(|(b, &(base, n_lifts))| BlockInfo {
-            block: b as u32 + 1,
-            n_lifts,
-            base_layer: base,
-            foundation_z: layers.z[base as usize],
-        })
-        .collect();
+    let blocks = super::super::block_infos(&lifts.blocks, &layers.z);
     let parts = (0..dam.part.len())
         .map(|e| match dam.part[e] {
             0 => Part::Rock,
