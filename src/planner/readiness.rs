@@ -220,6 +220,33 @@ pub struct Remedy {
     pub limited: Vec<String>,
 }
 
+/// Joins a supercooling's note and the site limits the schedule is past
+/// already and the supercooling too (the verification's cautions, which do
+/// not stop it).
+pub const CAUTION_MARK: &str =
+    "; the schedule is past a site limit already, and the supercooling too: ";
+
+impl Remedy {
+    /// The note without the cautions after [`CAUTION_MARK`]: the console
+    /// prints a supercooling's note only to say what choosing it together
+    /// saved, and leaves the cautions to the report, as for every zone.
+    pub fn note_without_cautions(&self) -> &str {
+        self.note
+            .find(CAUTION_MARK)
+            .map_or(self.note.as_str(), |i| &self.note[..i])
+    }
+
+    /// Whether the zone is supercooled by its neighbours' remedies alone:
+    /// chosen together with them at no supercooling of its own.
+    pub fn by_neighbours_alone(&self) -> bool {
+        self.choice == RemedyChoice::Supercool
+            && self
+                .supercool
+                .as_ref()
+                .is_some_and(|o| o.together.is_some() && o.delta_c <= 0.0)
+    }
+}
+
 /// Aperture and temperature history of one zone, for charts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ZoneHistory {

@@ -40,7 +40,7 @@ use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, Supercool
 use super::plan::zone_history;
 use super::readiness::{
     ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory,
-    ZoneReadiness,
+    ZoneReadiness, CAUTION_MARK,
 };
 use super::rules::{HistoryIndex, Rules};
 use super::runner::{Runner, Span};
@@ -538,12 +538,11 @@ fn stop_supercooling(rem: &mut Remedy, broken: Vec<limits::Breach>) {
 /// Notes the limits the schedule is past already and the remedy too (once
 /// per verification round: the last round's stand).
 fn caution(rem: &mut Remedy, cautions: &[limits::Breach]) {
-    const MARK: &str = "; the schedule is past a site limit already, and the supercooling too: ";
-    if let Some(i) = rem.note.find(MARK) {
+    if let Some(i) = rem.note.find(CAUTION_MARK) {
         rem.note.truncate(i);
     }
     if !cautions.is_empty() {
-        rem.note = format!("{}{MARK}{}", rem.note, cautions.join("; "));
+        rem.note = format!("{}{CAUTION_MARK}{}", rem.note, cautions.join("; "));
     }
 }
 

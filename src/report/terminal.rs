@@ -210,7 +210,7 @@ fn flagged_details(out: &mut String, plan: &Plan) {
             .filter(|r| r.choice == RemedyChoice::Supercool)
         {
             if r.supercool.as_ref().is_some_and(|o| o.together.is_some()) {
-                for l in wrap(&r.note, "    ", "    ", LINE_WIDTH) {
+                for l in wrap(r.note_without_cautions(), "    ", "    ", LINE_WIDTH) {
                     let _ = writeln!(out, "{l}");
                 }
             }

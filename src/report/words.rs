@@ -118,6 +118,11 @@ pub fn failed_rules(z: &ZoneReadiness) -> String {
 /// with it) or `no remedy found`.
 pub fn remedy_short(r: &Remedy) -> String {
     match (r.choice, &r.supercool, &r.delay) {
+        // "supercool 0.00 °C" would read as no remedy at all.
+        (RemedyChoice::Supercool, Some(s), _) if r.by_neighbours_alone() => format!(
+            "none of its own: its neighbours' supercooling → {} mm",
+            mm(s.aperture_mm)
+        ),
         (RemedyChoice::Supercool, Some(s), _) => {
             format!("supercool {:.2} °C → {} mm", s.delta_c, mm(s.aperture_mm))
         }
@@ -138,6 +143,9 @@ pub fn remedy_short(r: &Remedy) -> String {
 /// `supercool 1.25 °C`, `delay 12 d → 2024-10-03 +1 zone`, `none found`.
 pub fn remedy_brief(r: &Remedy) -> String {
     match (r.choice, &r.supercool, &r.delay) {
+        (RemedyChoice::Supercool, Some(_), _) if r.by_neighbours_alone() => {
+            "neighbours' supercooling".into()
+        }
         (RemedyChoice::Supercool, Some(s), _) => format!("supercool {:.2} °C", s.delta_c),
         (RemedyChoice::Delay, _, Some(d)) => {
             let mut s = format!("delay {} d → {}", d.days, d.date);
@@ -192,7 +200,8 @@ pub fn zone_words(z: &ZoneReadiness, s: &PlannerSettings) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::planner::{DelayOption, SupercoolOption};
+    use crate::planner::{ChosenTogether, DelayOption, SupercoolOption};
+    use crate::vocab::ZoneId;
 
     fn remedy(choice: RemedyChoice) -> Remedy {
         Remedy {
@@ -230,5 +239,37 @@ mod tests {
             verified_words(&remedy(RemedyChoice::None)).unwrap(),
             "verified marginal, 0.60 mm"
         );
+    }
+
+    /// A zone chosen together with its neighbours at no supercooling of its
+    /// own (the demo's joint 7 zone 4) is not offered "supercool 0.00 °C";
+    /// one with a supercooling of its own in the set keeps its figure.
+    #[test]
+    fn a_zone_its_neighbours_supercool_says_so() {
+        let together = |delta_c: f64| {
+            let mut r = remedy(RemedyChoice::Supercool);
+            let o = r.supercool.as_mut().unwrap();
+            o.delta_c = delta_c;
+            o.together = Some(ChosenTogether {
+                with: vec![ZoneId::new(6, 4)],
+                zone_by_zone_c: 0.25,
+                set_c: 0.5,
+                set_zone_by_zone_c: 0.75,
+            });
+            r
+        };
+        let r = together(0.0);
+        assert_eq!(
+            remedy_short(&r),
+            "none of its own: its neighbours' supercooling → 0.62 mm"
+        );
+        assert_eq!(remedy_brief(&r), "neighbours' supercooling");
+        let r = together(0.25);
+        assert_eq!(remedy_short(&r), "supercool 0.25 °C → 0.62 mm");
+        assert_eq!(remedy_brief(&r), "supercool 0.25 °C");
+        // Alone (not chosen together) a zero supercooling is no special case.
+        let mut r = remedy(RemedyChoice::Supercool);
+        r.supercool.as_mut().unwrap().delta_c = 0.0;
+        assert_eq!(remedy_short(&r), "supercool 0.00 °C → 0.62 mm");
     }
 }

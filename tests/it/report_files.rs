@@ -6,11 +6,12 @@ use std::path::Path;
 
 use chrono::NaiveDate;
 use groutready::planner::{
-    Apertures, DelayOption, MeterComparison, Plan, PlanStats, Remedy, RemedyChoice, Rule,
-    RuleCheck, SupercoolOption, Verdict, ZoneHistory, ZoneReadiness,
+    Apertures, ChosenTogether, DelayOption, MeterComparison, Plan, PlanStats, Remedy, RemedyChoice,
+    Rule, RuleCheck, SupercoolOption, Verdict, ZoneHistory, ZoneReadiness, CAUTION_MARK,
 };
 use groutready::report::{self, charts, svg};
 use groutready::scene::PlannerSettings;
+use groutready::vocab::ZoneId;
 
 fn date(s: &str) -> NaiveDate {
     s.parse().unwrap()
@@ -883,6 +884,56 @@ fn terminal_table_lists_zones_to_grout_with_limits_and_reasons_in_full() {
     // Without warnings or re-openings there is no such block.
     let plain = report::readiness_table(&fixture());
     assert!(!plain.contains("Warnings") && !plain.contains("Re-open after"));
+}
+
+/// Zones supercooled as one set (the demo's zones 4 of joints 6 to 8): the
+/// console says what the set saved, and leaves the site limits the schedule
+/// is past already (appended to the note, which the report keeps) to the
+/// report, as for a zone supercooled alone; a zone of the set with no
+/// supercooling of its own says its neighbours' supercooling fixes it.
+#[test]
+fn terminal_table_says_what_the_set_saved_and_leaves_the_cautions_to_the_report() {
+    let together = "supercooled together with joint 3 zone 1: 1.25 °C in all against \
+                    1.50 °C zone by zone (1.25 °C for this zone alone)";
+    let caution = "gradient: in block 3, zone 3 above would be 4.3 °C warmer than zone 2 \
+                   (4.2 without the remedy), more than 4.0 °C";
+    let mut plan = fixture();
+    let set = |plan: &mut Plan, delta_c: f64| {
+        let z = plan
+            .zones
+            .iter_mut()
+            .find(|z| z.zone_id() == ZoneId::new(2, 2));
+        let r = z.unwrap().remedy.as_mut().unwrap();
+        r.note = format!("{together}{CAUTION_MARK}{caution}");
+        let o = r.supercool.as_mut().unwrap();
+        o.delta_c = delta_c;
+        o.together = Some(ChosenTogether {
+            with: vec![ZoneId::new(3, 1)],
+            zone_by_zone_c: 1.25,
+            set_c: 1.25,
+            set_zone_by_zone_c: 1.5,
+        });
+    };
+    set(&mut plan, 1.25);
+    let t = report::readiness_table(&plan);
+    let flat = t.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(flat.contains(together), "{t}");
+    assert!(!t.contains("site limit") && !t.contains("gradient"), "{t}");
+    assert!(
+        t.contains("→ remedy: supercool 1.25 °C → 0.62 mm (verified marginal, 0.61 mm)"),
+        "{t}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let files = report::write_all(dir.path(), &plan).unwrap();
+    let md = std::fs::read_to_string(&files.markdown).unwrap();
+    assert!(md.contains(caution), "the report keeps the cautions:\n{md}");
+
+    set(&mut plan, 0.0);
+    let t = report::readiness_table(&plan);
+    assert!(
+        t.contains("→ remedy: none of its own: its neighbours' supercooling → 0.62 mm"),
+        "{t}"
+    );
 }
 
 /// A remedy's verified run of joint 2 zone 2 from the as-of date to its
