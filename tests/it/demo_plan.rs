@@ -1,7 +1,10 @@
 //! The README's main command on the bundled demo: `groutready plan` with no
 //! arguments flags the zones that will be too tight on their planned dates,
 //! proposes remedies, and the remedied schedules it writes make those zones
-//! groutable when they are simulated from scratch (not restarted).
+//! groutable when they are simulated from scratch (not restarted). It shows
+//! both kinds of supercooling (issue 15 item 5): a running second stage
+//! split at the as-of date with colder water, and neighbouring zones
+//! supercooled together for less than zone by zone.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -52,6 +55,8 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
         assert!(!reasons.is_empty());
         assert!(a < 0.5 || !reasons.iter().any(|r| r.starts_with("aperture")));
     }
+
+    together_and_running_stages(&stdout, &report, &flagged, out);
 
     // The remedied schedules, simulated from day 0.
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -110,4 +115,62 @@ fn demo_plan_flags_zones_and_its_remedies_hold_from_scratch() {
             r.reasons()
         );
     }
+}
+
+/// The demo's two supercoolings: a set of neighbours chosen together, each
+/// too warm (whatever the aperture rule reads), costing strictly less than
+/// zone by zone, as the console says; and a running second stage split at
+/// the as-of date, continued with colder water and a lower target.
+fn together_and_running_stages(
+    stdout: &str,
+    report: &serde_json::Value,
+    flagged: &[&serde_json::Value],
+    out: &Path,
+) {
+    let together: Vec<&serde_json::Value> = flagged
+        .iter()
+        .copied()
+        .filter(|z| z["remedy"]["choice"] == "supercool")
+        .filter(|z| z["remedy"]["supercool"]["together"].is_object())
+        .collect();
+    assert!(together.len() >= 2, "a set of neighbours:\n{stdout}");
+    for z in &together {
+        let t = &z["remedy"]["supercool"]["together"];
+        let (set, zbz) = (
+            t["set_c"].as_f64().unwrap(),
+            t["set_zone_by_zone_c"].as_f64().unwrap(),
+        );
+        assert!(set < zbz - 1e-9, "{t}");
+        let too_warm = z["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|c| c["rule"] == "temperature" && c["passed"] == false);
+        assert!(too_warm, "the set is flagged on temperature: {z}");
+        let line = format!("{set:.2} °C in all against {zbz:.2} °C zone by");
+        assert!(stdout.contains(&line), "{line:?} missing:\n{stdout}");
+    }
+
+    // A stage running on the as-of date, split there: the row before ends
+    // on it, the row continuing it starts on it with colder water.
+    let as_of: chrono::NaiveDate = report["as_of"].as_str().unwrap().parse().unwrap();
+    let base =
+        schedule::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("schedules/demo_arch")).unwrap();
+    let remedied = schedule::load(&out.join("remedied")).unwrap();
+    let split = remedied.cooling.iter().any(|c| {
+        c.start == as_of
+            && remedied.cooling.iter().any(|b| {
+                (b.block, b.lift_from, b.lift_to, b.stage)
+                    == (c.block, c.lift_from, c.lift_to, c.stage)
+                    && b.start < as_of
+                    && b.end == Some(as_of)
+                    && base.cooling.iter().any(|o| {
+                        (o.block, o.lift_from, o.lift_to, o.start)
+                            == (b.block, b.lift_from, b.lift_to, b.start)
+                            && o.end.is_some_and(|e| e > as_of)
+                            && c.water_temp_c < o.water_temp_c
+                    })
+            })
+    });
+    assert!(split, "a running stage split at {as_of} with colder water");
 }
