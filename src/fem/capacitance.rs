@@ -88,13 +88,7 @@ pub fn constrained_residual(
     rhs: &[f64],
     x: &[f64],
 ) -> f64 {
-    let mut b = rhs.to_vec();
-    a.dirichlet_correction(fixed, presc, &mut b);
-    for i in 0..a.n() {
-        if fixed[i] {
-            b[i] = presc[i];
-        }
-    }
+    let b = constrained_rhs(a, fixed, presc, rhs);
     // A x on the free rows counts only the free columns: the fixed ones
     // are in b's correction
     let xf: Vec<f64> = (0..a.n())
@@ -117,6 +111,29 @@ pub fn constrained_residual(
     } else {
         num.sqrt()
     }
+}
+
+/// The right-hand side of the system M x = b that A with the rows `fixed`
+/// held at `presc` becomes: `rhs` less the fixed columns' loads on the free
+/// rows, `presc` on the fixed ones.
+fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) -> Vec<f64> {
+    let mut b = rhs.to_vec();
+    a.dirichlet_correction(fixed, presc, &mut b);
+    for i in 0..a.n() {
+        if fixed[i] {
+            b[i] = presc[i];
+        }
+    }
+    b
+}
+
+/// A corrected solution and its relative residual on the changed system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Corrected {
+    pub x: Vec<f64>,
+    /// ‖b − M x‖ / ‖b‖ of the constrained system, what
+    /// [`constrained_residual`] measures (see [`Capacitance::solve`])
+    pub residual: f64,
 }
 
 /// How a row's state differs from the base factor's.
@@ -267,6 +284,13 @@ impl Capacitance {
     /// system is ill-conditioned (seen on the demo: 1.3e-8), so the result
     /// is refined on the residual of the free rows until it stops improving
     /// (at most [`MAX_REFINEMENTS`] times).
+    ///
+    /// The returned residual is the refinement's last one, relative to the
+    /// constrained right-hand side: x holds `presc` exactly on the fixed
+    /// rows, so rhs − A x on the free rows is b − M x there (b the
+    /// constrained right-hand side, M the constrained matrix) and zero on
+    /// the fixed rows, i.e. [`constrained_residual`]'s quantity, without a
+    /// second product with A.
     pub fn solve(
         &mut self,
         solver: &CholeskySolver,
@@ -274,7 +298,7 @@ impl Capacitance {
         fixed: &[bool],
         presc: &[f64],
         rhs: &[f64],
-    ) -> Result<Vec<f64>, SolveError> {
+    ) -> Result<Corrected, SolveError> {
         let t = std::time::Instant::now();
         let n = a.n();
         if fixed.len() != n || presc.len() != n || rhs.len() != n || self.base.len() != n {
@@ -303,10 +327,16 @@ impl Capacitance {
             }
             (x, r, norm) = (refined, r_next, next);
         }
+        let b_norm = constrained_rhs(a, fixed, presc, rhs)
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt();
+        let residual = if b_norm > 0.0 { norm / b_norm } else { norm };
         self.stats.solves += 1;
         self.stats.max_rank = self.stats.max_rank.max(changes.len());
         self.stats.seconds += t.elapsed().as_secs_f64();
-        Ok(x)
+        Ok(Corrected { x, residual })
     }
 
     /// One application of the correction (the columns of `changes` filled).

@@ -59,7 +59,6 @@
 
 use std::time::Instant;
 
-use crate::fem::capacitance::constrained_residual;
 use crate::fem::{relative_residual, Capacitance, CapacitanceStats, SolveError, SparseSym};
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
@@ -523,15 +522,16 @@ impl ActiveSet {
             return solve_checked(live, &self.m, &rhs, &mut trial.out);
         }
         let before = cap.stats;
-        let x = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
+        let corrected = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
         trial.out.capacitance.add(&cap.stats.since(&before));
         trial.out.solves += 1;
         // the residual on the system of this pass's rows, as a fresh factor's
-        let res = constrained_residual(&self.a_cur, &fixed, &presc, &rhs, &x);
+        // (the correction's last refinement measured it)
+        let res = corrected.residual;
         if res.is_nan() || res > RESIDUAL_TOLERANCE {
             return Err(JointStepError::Residual(res));
         }
-        Ok(x)
+        Ok(corrected.x)
     }
 
     /// Why the factor in `live` cannot serve the guess with rows `fixed`

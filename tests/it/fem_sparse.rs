@@ -565,7 +565,8 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
         let mut x_ref = rhs1.clone();
         fresh.solve_in_place(&mut x_ref).unwrap();
         let columns = cap.stats.columns;
-        let x = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let x = corrected.x;
         let scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let diff = x
             .iter()
@@ -587,7 +588,13 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
             groutready::fem::capacitance::constrained_residual(&a, &fixed, &presc, &rhs, x)
         };
         assert!(unformed(&x) < 1e-12, "{name}");
-
+        // the residual the correction returns is the same quantity
+        assert!(
+            (corrected.residual - unformed(&x)).abs() <= 1e-14,
+            "{name}: {:e} vs {:e}",
+            corrected.residual,
+            unformed(&x)
+        );
         let mut off = x.clone();
         off[1] += 0.1;
         off[2] -= 0.2;
@@ -654,23 +661,28 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
             .iter()
             .filter(|c| c.1 == groutready::fem::RowChange::Diagonal)
             .count();
-        let x = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
+        let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
         let x_scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = x
+        let diff = corrected
+            .x
             .iter()
             .zip(&x_ref)
             .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
         eprintln!(
-            "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}",
+            "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}, residual {:.2e}",
             changes.len(),
-            diff
+            diff,
+            corrected.residual
         );
         assert!(diagonal > 10, "{name}: springs changed on free rows");
         assert!(
             diff <= 1e-12 * x_scale,
             "{name}: differs by {diff:.3e} (scale {x_scale:.3e})"
         );
-        assert!(relative_residual(&m1, &x, &rhs1) < 1e-12, "{name}");
+        assert!(
+            relative_residual(&m1, &corrected.x, &rhs1) < 1e-12,
+            "{name}"
+        );
     }
     // a diagonal change shares the column of the row fixed at the same dof
     let fixed: Vec<bool> = (0..n).map(|i| base[i] || i % 6 == 3).collect();
