@@ -462,10 +462,10 @@ pub struct SolverSettings {
     /// Contact passes per step before the step fails (an error naming the
     /// date); default 60.
     pub contact_max_iterations: u32,
-    /// Active set: solve a pass whose closed joint points differ from the
-    /// factored ones by the capacitance correction on the step's factor
-    /// (exact, no new factorisation) while that is cheaper than
-    /// refactorising; default true. `false` refactorises at every change
+    /// Active set: solve a pass whose closed joint points or intact grout
+    /// layers differ from the factored ones by the capacitance correction
+    /// on the step's factor (exact, no new factorisation) while that is
+    /// cheaper than refactorising; default true. `false` refactorises at every change
     /// (the path it is compared with in `groutready study perf`).
     pub contact_capacitance: bool,
     /// Fill-reducing ordering of the mechanical factorisation: `metis`
