@@ -30,6 +30,18 @@
 //! x_f = y − Z w,   x_R = w_R,   x = p on F₀ ∩ F₁.
 //! ```
 //!
+//! A spring added to or removed from a row free in both sets (a grout
+//! layer bonded or cracked: its stiffness sits on the diagonal of its
+//! pair's rows) changes A₀'s diagonal there by δᵢ, K by Σ δᵢ eᵢeᵢᵀ. Each
+//! such row D is bordered with μᵢ = δᵢ x_i: U gains the column e_i (the
+//! same Z column as a newly fixed row), S the diagonal entry −1/δᵢ, r a
+//! zero (eliminate x_f from K x_f + … + E_D μ = b_f and x_D − μ/δ = 0).
+//! The caller then passes the changed matrix (its diagonal the new one)
+//! and the base diagonal ([`Capacitance::with_diagonal`]); the rows
+//! released or fixed read their own entries from the changed matrix, and
+//! the off-diagonal columns U are untouched by springs, so the cached Z
+//! columns stay valid.
+//!
 //! S is symmetric quasi-definite (the Schur complement of an SPD matrix in
 //! the R block, −E_NᵀK⁻¹E_N in the N block), solved densely by LU. The
 //! columns of Z depend on the base factor only, so they are kept per dof:
@@ -37,9 +49,10 @@
 //! exact (no penalty, no tolerance); the caller checks its residual on the
 //! F₁ matrix like any solve.
 //!
-//! Verified by `tests/it/fem_capacitance.rs`: the corrected solution equals
+//! Verified by `tests/it/fem_sparse.rs`: the corrected solution equals
 //! a fresh factorisation of the F₁ system to round-off for rows fixed,
-//! released and both, with prescribed values.
+//! released and both, with prescribed values, and with springs added to and
+//! removed from free rows besides.
 
 use std::collections::BTreeMap;
 
@@ -75,13 +88,7 @@ pub fn constrained_residual(
     rhs: &[f64],
     x: &[f64],
 ) -> f64 {
-    let mut b = rhs.to_vec();
-    a.dirichlet_correction(fixed, presc, &mut b);
-    for i in 0..a.n() {
-        if fixed[i] {
-            b[i] = presc[i];
-        }
-    }
+    let b = constrained_rhs(a, fixed, presc, rhs);
     // A x on the free rows counts only the free columns: the fixed ones
     // are in b's correction
     let xf: Vec<f64> = (0..a.n())
@@ -106,6 +113,29 @@ pub fn constrained_residual(
     }
 }
 
+/// The right-hand side of the system M x = b that A with the rows `fixed`
+/// held at `presc` becomes: `rhs` less the fixed columns' loads on the free
+/// rows, `presc` on the fixed ones.
+fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) -> Vec<f64> {
+    let mut b = rhs.to_vec();
+    a.dirichlet_correction(fixed, presc, &mut b);
+    for i in 0..a.n() {
+        if fixed[i] {
+            b[i] = presc[i];
+        }
+    }
+    b
+}
+
+/// A corrected solution and its relative residual on the changed system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Corrected {
+    pub x: Vec<f64>,
+    /// ‖b − M x‖ / ‖b‖ of the constrained system, what
+    /// [`constrained_residual`] measures (see [`Capacitance::solve`])
+    pub residual: f64,
+}
+
 /// How a row's state differs from the base factor's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum RowChange {
@@ -113,6 +143,19 @@ pub enum RowChange {
     Released,
     /// free in the base, fixed now
     Fixed,
+    /// free in both, its diagonal entry changed (a spring added or removed)
+    Diagonal,
+}
+
+impl RowChange {
+    /// The change whose column of Z this one uses: a diagonal change's
+    /// column is K⁻¹e_i, the same as a newly fixed row's.
+    fn column_key(self) -> RowChange {
+        match self {
+            RowChange::Diagonal => RowChange::Fixed,
+            other => other,
+        }
+    }
 }
 
 /// What the corrections cost: counted per factor here, summed per step by
@@ -157,6 +200,9 @@ impl CapacitanceStats {
 #[derive(Debug, Clone)]
 pub struct Capacitance {
     base: Vec<bool>,
+    /// the base matrix's diagonal when the solved matrices may differ
+    /// from it there ([`Capacitance::with_diagonal`])
+    base_diag: Option<Vec<f64>>,
     /// K⁻¹ U column of each changed row, by (dof, change)
     z: BTreeMap<(u32, RowChange), Vec<f64>>,
     pub stats: CapacitanceStats,
@@ -167,8 +213,19 @@ impl Capacitance {
     pub fn new(base: Vec<bool>) -> Self {
         Capacitance {
             base,
+            base_diag: None,
             z: BTreeMap::new(),
             stats: CapacitanceStats::default(),
+        }
+    }
+
+    /// For a factor of A₀ with the rows `base` fixed, where `base_diag` is
+    /// A₀'s diagonal: the matrices later solved may differ from A₀ on the
+    /// diagonal of rows free in both (springs added or removed).
+    pub fn with_diagonal(base: Vec<bool>, base_diag: Vec<f64>) -> Self {
+        Capacitance {
+            base_diag: Some(base_diag),
+            ..Capacitance::new(base)
         }
     }
 
@@ -177,8 +234,15 @@ impl Capacitance {
         &self.base
     }
 
-    /// The rows fixed in one of the base and `fixed` only, in dof order.
-    pub fn changes(&self, fixed: &[bool]) -> Vec<(u32, RowChange)> {
+    /// The rows fixed in one of the base and `fixed` only, and (with a
+    /// base diagonal) the rows free in both whose diagonal entry in `a`
+    /// differs from the base's, in dof order.
+    pub fn changes(&self, a: &SparseSym, fixed: &[bool]) -> Vec<(u32, RowChange)> {
+        let diag_changed = |i: usize| {
+            self.base_diag
+                .as_ref()
+                .is_some_and(|d| a.diag_at(i) != d[i])
+        };
         self.base
             .iter()
             .zip(fixed)
@@ -186,6 +250,7 @@ impl Capacitance {
             .filter_map(|(i, (&b, &f))| match (b, f) {
                 (true, false) => Some((i as u32, RowChange::Released)),
                 (false, true) => Some((i as u32, RowChange::Fixed)),
+                (false, false) if diag_changed(i) => Some((i as u32, RowChange::Diagonal)),
                 _ => None,
             })
             .collect()
@@ -193,7 +258,18 @@ impl Capacitance {
 
     /// Of `changes`, how many need a new column of Z.
     pub fn uncached(&self, changes: &[(u32, RowChange)]) -> usize {
-        changes.iter().filter(|c| !self.z.contains_key(c)).count()
+        let mut keys: Vec<(u32, RowChange)> = changes
+            .iter()
+            .map(|&(dof, c)| (dof, c.column_key()))
+            .filter(|k| !self.z.contains_key(k))
+            .collect();
+        keys.dedup();
+        keys.len()
+    }
+
+    /// The cached column of Z of a change.
+    fn z_of(&self, &(dof, change): &(u32, RowChange)) -> &[f64] {
+        &self.z[&(dof, change.column_key())]
     }
 
     /// Bytes held by the cached columns.
@@ -208,6 +284,13 @@ impl Capacitance {
     /// system is ill-conditioned (seen on the demo: 1.3e-8), so the result
     /// is refined on the residual of the free rows until it stops improving
     /// (at most [`MAX_REFINEMENTS`] times).
+    ///
+    /// The returned residual is the refinement's last one, relative to the
+    /// constrained right-hand side: x holds `presc` exactly on the fixed
+    /// rows, so rhs − A x on the free rows is b − M x there (b the
+    /// constrained right-hand side, M the constrained matrix) and zero on
+    /// the fixed rows, i.e. [`constrained_residual`]'s quantity, without a
+    /// second product with A.
     pub fn solve(
         &mut self,
         solver: &CholeskySolver,
@@ -215,7 +298,7 @@ impl Capacitance {
         fixed: &[bool],
         presc: &[f64],
         rhs: &[f64],
-    ) -> Result<Vec<f64>, SolveError> {
+    ) -> Result<Corrected, SolveError> {
         let t = std::time::Instant::now();
         let n = a.n();
         if fixed.len() != n || presc.len() != n || rhs.len() != n || self.base.len() != n {
@@ -224,7 +307,7 @@ impl Capacitance {
                 got: fixed.len().min(presc.len()).min(rhs.len()),
             });
         }
-        let changes = self.changes(fixed);
+        let changes = self.changes(a, fixed);
         self.fill_columns(solver, a, &changes)?;
         let mut x = self.apply(solver, a, &changes, fixed, presc, rhs)?;
         let (mut r, mut norm) = free_residual(a, fixed, rhs, &x);
@@ -244,10 +327,16 @@ impl Capacitance {
             }
             (x, r, norm) = (refined, r_next, next);
         }
+        let b_norm = constrained_rhs(a, fixed, presc, rhs)
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt();
+        let residual = if b_norm > 0.0 { norm / b_norm } else { norm };
         self.stats.solves += 1;
         self.stats.max_rank = self.stats.max_rank.max(changes.len());
         self.stats.seconds += t.elapsed().as_secs_f64();
-        Ok(x)
+        Ok(Corrected { x, residual })
     }
 
     /// One application of the correction (the columns of `changes` filled).
@@ -272,7 +361,7 @@ impl Capacitance {
         let mut x = y;
         for (c, &wj) in changes.iter().zip(&w) {
             if wj != 0.0 {
-                for (xi, zi) in x.iter_mut().zip(&self.z[c]) {
+                for (xi, zi) in x.iter_mut().zip(self.z_of(c)) {
                     *xi -= zi * wj;
                 }
             }
@@ -297,11 +386,12 @@ impl Capacitance {
         a: &SparseSym,
         changes: &[(u32, RowChange)],
     ) -> Result<(), SolveError> {
-        let new: Vec<(u32, RowChange)> = changes
+        let mut new: Vec<(u32, RowChange)> = changes
             .iter()
-            .copied()
-            .filter(|c| !self.z.contains_key(c))
+            .map(|&(dof, c)| (dof, c.column_key()))
+            .filter(|k| !self.z.contains_key(k))
             .collect();
+        new.dedup();
         if new.is_empty() {
             return Ok(());
         }
@@ -309,7 +399,7 @@ impl Capacitance {
         let mut u = Mat::<f64>::zeros(n, new.len());
         for (k, &(dof, change)) in new.iter().enumerate() {
             match change {
-                RowChange::Fixed => u[(dof as usize, k)] = 1.0,
+                RowChange::Fixed | RowChange::Diagonal => u[(dof as usize, k)] = 1.0,
                 RowChange::Released => a.column(dof as usize, |i, v| {
                     if !self.base[i] {
                         u[(i, k)] = v;
@@ -323,6 +413,11 @@ impl Capacitance {
         }
         self.stats.columns += u.ncols() as u64;
         Ok(())
+    }
+
+    /// δ = A_ii − A₀_ii of a row with a [`RowChange::Diagonal`].
+    fn diagonal_change(&self, a: &SparseSym, i: usize) -> f64 {
+        self.base_diag.as_ref().map_or(0.0, |d| a.diag_at(i) - d[i])
     }
 
     /// Assembles and solves S w = r (see the module doc).
@@ -341,7 +436,7 @@ impl Capacitance {
         // Uᵢᵀv for the column of change i
         let u_dot = |&(dof, change): &(u32, RowChange), v: &[f64]| -> f64 {
             match change {
-                RowChange::Fixed => v[dof as usize],
+                RowChange::Fixed | RowChange::Diagonal => v[dof as usize],
                 RowChange::Released => {
                     let mut s = 0.0;
                     a.column(dof as usize, |k, akr| {
@@ -361,13 +456,17 @@ impl Capacitance {
                     (RowChange::Released, RowChange::Released) => {
                         a.get(ci.0 as usize, cj.0 as usize)
                     }
+                    (RowChange::Diagonal, RowChange::Diagonal) if i == j => {
+                        -1.0 / self.diagonal_change(a, ci.0 as usize)
+                    }
                     _ => 0.0,
                 };
-                s[(i, j)] = arr - u_dot(ci, &self.z[cj]);
+                s[(i, j)] = arr - u_dot(ci, self.z_of(cj));
             }
             let top = match ci.1 {
                 RowChange::Released => b[ci.0 as usize],
                 RowChange::Fixed => presc[ci.0 as usize],
+                RowChange::Diagonal => 0.0,
             };
             r[i] = top - u_dot(ci, y);
         }

@@ -37,7 +37,7 @@ pub mod solver;
 pub mod sparse;
 pub mod thermal_kernels;
 
-pub use capacitance::{Capacitance, CapacitanceStats, RowChange};
+pub use capacitance::{Capacitance, CapacitanceStats, Corrected, RowChange};
 pub use elasticity::{isotropic_d, poisson_matrix, principal_stresses, von_mises, SolidGauss};
 pub use error::ElementError;
 pub use ordering::{metis_nested_dissection, nested_dissection, MetisError, Ordering};

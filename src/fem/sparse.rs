@@ -516,6 +516,12 @@ impl SparseSym {
         self.values[self.pattern.diag_idx[dof] as usize] += v;
     }
 
+    /// A_ii.
+    #[inline]
+    pub fn diag_at(&self, dof: usize) -> f64 {
+        self.values[self.pattern.diag_idx[dof] as usize]
+    }
+
     /// Entry (i, j) (0 when not stored). Binary search.
     pub fn get(&self, i: usize, j: usize) -> f64 {
         self.pattern.find(i, j).map_or(0.0, |k| self.values[k])

@@ -29,11 +29,13 @@
 //!   serves every pass: a pass whose constrained rows differ from the
 //!   factor's is solved exactly by the capacitance correction of
 //!   [`crate::fem::capacitance`] (m solves for the m changed rows, kept for
-//!   later passes, and a dense m × m system), and the step refactorises
-//!   only when the new rows would cost more solves than a factorisation
-//!   (counted by flops, so the choice is deterministic) or the grout
-//!   springs change. `solver.contact_capacitance = false` refactorises at
-//!   every change instead (the exact path it is compared with). Friction is a return mapping:
+//!   later passes, and a dense m × m system); a grout layer that cracks
+//!   within the step removes its springs from the diagonal of its pair's
+//!   rows, a diagonal change the same correction takes. The step
+//!   refactorises only when the new rows would cost more solves than a
+//!   factorisation (counted by flops, so the choice is deterministic).
+//!   `solver.contact_capacitance = false` refactorises at every change
+//!   instead (the exact path it is compared with). Friction is a return mapping:
 //!   a point that slipped in the last step starts as a stick trial, slips if
 //!   its trial force exceeds μ_k·r_n (μ_s for a point at rest), in the trial
 //!   force's direction for the whole step; the slip forces μ_k·r_n(x) are a
@@ -57,7 +59,6 @@
 
 use std::time::Instant;
 
-use crate::fem::capacitance::constrained_residual;
 use crate::fem::{relative_residual, Capacitance, CapacitanceStats, SolveError, SparseSym};
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
@@ -144,7 +145,7 @@ pub struct JointStepOutcome {
 pub enum RefactorReason {
     /// the step's first pass (the stiffness has aged, elements were born)
     Step,
-    /// grout springs appeared or cracked
+    /// grout springs appeared or cracked and the correction is off
     Grout,
     /// the constrained rows changed and the correction is off
     Contact,
@@ -369,9 +370,11 @@ struct ActiveSet {
     frictionless: bool,
     anderson: Anderson,
     /// the grout springs of the factor in `live` and the correction of
-    /// its constrained rows to the current guess's
+    /// its constrained rows and springs to the current guess's
     factored: Option<(Vec<bool>, Capacitance)>,
-    /// K̃ with the springs of the factored states, before its Dirichlet rows
+    /// the grout springs of the current guess (per live pair), once known
+    springs: Option<Vec<bool>>,
+    /// K̃ with the springs of the current guess, before its Dirichlet rows
     a_cur: SparseSym,
     /// the factored matrix
     m: SparseSym,
@@ -444,6 +447,7 @@ impl ActiveSet {
             frictionless: s.mu_static == 0.0,
             anderson: Anderson::new(ANDERSON_DEPTH),
             factored: None,
+            springs: None,
             a_cur: SparseSym::new(sys.a.pattern().clone()),
             m: SparseSym::new(sys.a.pattern().clone()),
             capacitance: s.capacitance,
@@ -488,18 +492,27 @@ impl ActiveSet {
                 PointState::Grouted => springs[q] = true,
             }
         }
-        if let Some(reason) = self.refactor_reason(live, &fixed, &springs) {
+        if self.springs.as_deref() != Some(springs.as_slice()) {
+            // the matrix of this pass: the factor's, or the one the
+            // correction solves (springs as a diagonal change)
             self.a_cur = with_springs(sys.a, live, work);
+            self.springs = Some(springs);
+        }
+        if let Some(reason) = self.refactor_reason(live, &fixed) {
             self.m = self.a_cur.clone();
             self.m.apply_dirichlet(&fixed);
             factorize(live, &self.m, &mut trial.out)?;
             trial.out.refactor_reasons.count(reason);
-            self.factored = Some((springs, Capacitance::new(fixed.clone())));
+            let base_diag = self.a_cur.diag();
+            self.factored = Some((
+                self.springs.clone().unwrap_or_default(),
+                Capacitance::with_diagonal(fixed.clone(), base_diag),
+            ));
         }
-        let Some((_, cap)) = self.factored.as_mut() else {
+        let Some((factored_springs, cap)) = self.factored.as_mut() else {
             unreachable!("factorised above")
         };
-        if cap.base() == fixed.as_slice() {
+        if cap.base() == fixed.as_slice() && self.springs.as_ref() == Some(factored_springs) {
             self.a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
             for i in 0..live.n {
                 if fixed[i] {
@@ -509,39 +522,37 @@ impl ActiveSet {
             return solve_checked(live, &self.m, &rhs, &mut trial.out);
         }
         let before = cap.stats;
-        let x = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
+        let corrected = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
         trial.out.capacitance.add(&cap.stats.since(&before));
         trial.out.solves += 1;
         // the residual on the system of this pass's rows, as a fresh factor's
-        let res = constrained_residual(&self.a_cur, &fixed, &presc, &rhs, &x);
+        // (the correction's last refinement measured it)
+        let res = corrected.residual;
         if res.is_nan() || res > RESIDUAL_TOLERANCE {
             return Err(JointStepError::Residual(res));
         }
-        Ok(x)
+        Ok(corrected.x)
     }
 
     /// Why the factor in `live` cannot serve the guess with rows `fixed`
-    /// constrained and grout `springs`, or `None` when it can (directly or
-    /// through the capacitance correction).
-    fn refactor_reason(
-        &self,
-        live: &LiveSystem,
-        fixed: &[bool],
-        springs: &[bool],
-    ) -> Option<RefactorReason> {
+    /// constrained and the grout springs of `self.a_cur`, or `None` when it
+    /// can (directly or through the capacitance correction).
+    fn refactor_reason(&self, live: &LiveSystem, fixed: &[bool]) -> Option<RefactorReason> {
         let Some((factored_springs, cap)) = &self.factored else {
             return Some(RefactorReason::Step);
         };
-        if factored_springs.as_slice() != springs {
-            return Some(RefactorReason::Grout);
-        }
-        if cap.base() == fixed {
+        let same_springs = self.springs.as_ref() == Some(factored_springs);
+        if cap.base() == fixed && same_springs {
             return None;
         }
         if !self.capacitance {
-            return Some(RefactorReason::Contact);
+            return Some(if same_springs {
+                RefactorReason::Contact
+            } else {
+                RefactorReason::Grout
+            });
         }
-        let changes = cap.changes(fixed);
+        let changes = cap.changes(&self.a_cur, fixed);
         let new_columns = cap.uncached(&changes);
         let rank = changes.len() as f64;
         let nnz = live.solver.factor_nnz() as f64;

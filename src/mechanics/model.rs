@@ -11,11 +11,12 @@ use crate::fem::{CapacitanceStats, ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, CreepLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
+use crate::scene::OrderingKind;
 use crate::vocab::JointState;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, RefactorCounts, StepSystem};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::live::{ElementSet, LiveError, LiveSystem, NONE};
+use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
 use super::settings::{JointMechanics, MechanicsSettings};
 
 /// Gravity [m/s²].
@@ -100,8 +101,27 @@ pub struct MechStats {
     /// largest number of free (not supported) dofs of a live system
     #[serde(default)]
     pub max_free_dofs: usize,
-    /// wall time of the rebuilds [s]
+    /// wall time of the rebuilds [s] (orderings included)
     pub seconds_symbolic: f64,
+    /// METIS calls: one per live set with `solver.ordering = "metis_live_set"`,
+    /// one for the whole construction with `"metis"`
+    #[serde(default)]
+    pub metis_calls: usize,
+    /// wall time of the elimination orders (METIS, restrictions) [s]
+    #[serde(default)]
+    pub seconds_ordering: f64,
+    /// wall time of faer's symbolic analyses in those orders [s]
+    #[serde(default)]
+    pub seconds_analysis: f64,
+    /// Σ over the live sets of the entries of L
+    #[serde(default)]
+    pub live_sets_factor_nnz: u64,
+    /// Σ over the live sets of the flops of one factorisation
+    #[serde(default)]
+    pub live_sets_factor_flops: f64,
+    /// Σ over the numeric factorisations of their flops (the work done)
+    #[serde(default)]
+    pub numeric_flops: f64,
     /// wall time of the numeric factorisations [s]
     pub seconds_numeric: f64,
     /// wall time of the solves without joints [s]
@@ -182,6 +202,8 @@ pub struct MechanicsModel {
     wet_faces: Vec<(u32, u8)>,
     /// the system of the live set at the last rebuild (empty before the first step)
     sys: LiveSystem,
+    /// how each live set's elimination order is chosen
+    ordering: OrderingPlan,
     /// the live set has changed since `sys` was built
     dirty: bool,
     /// contact points of the joints (the `joints` effect)
@@ -328,6 +350,18 @@ impl MechanicsModel {
         let n_creep = settings.concrete.creep.as_ref().map_or(0, |l| l.n_terms());
         let sys = LiveSystem::empty(&points, mesh.nodes.len())
             .map_err(|source| MechError::Live { day: 0.0, source })?;
+        let mut stats = MechStats::default();
+        let ordering = match settings.ordering {
+            OrderingKind::Amd => OrderingPlan::Amd,
+            OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
+            OrderingKind::Metis => {
+                let c = ConstructionOrdering::new(&mesh.elements, &points, mesh.nodes.len())
+                    .map_err(|source| MechError::Live { day: 0.0, source })?;
+                stats.metis_calls += 1;
+                stats.seconds_ordering += c.seconds;
+                OrderingPlan::Construction(std::sync::Arc::new(c))
+            }
+        };
         let state =
             MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
         Ok(MechanicsModel {
@@ -347,6 +381,7 @@ impl MechanicsModel {
                 .map(|s| (s.elem, s.face))
                 .collect(),
             sys,
+            ordering,
             dirty: true,
             joint_settings: joint_solve_settings(mesh, &settings.joint),
             point_of_a: points
@@ -356,7 +391,7 @@ impl MechanicsModel {
                 .collect(),
             zone_inner_points: inside_grout_stops(mesh, &points),
             state,
-            stats: MechStats::default(),
+            stats,
             points,
         })
     }
@@ -429,9 +464,14 @@ impl MechanicsModel {
             &pair_live,
             &self.supported,
             n_nodes,
-            self.settings.ordering,
+            &self.ordering,
         )?;
         self.stats.symbolic += 1;
+        self.stats.metis_calls += sys.ordering.metis_calls;
+        self.stats.seconds_ordering += sys.ordering.seconds;
+        self.stats.seconds_analysis += sys.solver.stats().symbolic_seconds;
+        self.stats.live_sets_factor_nnz += sys.solver.factor_nnz() as u64;
+        self.stats.live_sets_factor_flops += sys.solver.factor_flops();
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
         let free = sys.supported.iter().filter(|&&s| !s).count();
         self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
@@ -736,6 +776,7 @@ impl MechanicsModel {
         )
         .map_err(|source| MechError::Joints { day, source })?;
         self.stats.numeric += out.factorizations;
+        self.stats.numeric_flops += out.factorizations as f64 * self.sys.solver.factor_flops();
         self.stats.seconds_numeric += out.seconds_numeric;
         self.stats.contact_iterations += out.iterations;
         self.stats.kept_closed_tension =
@@ -817,6 +858,7 @@ impl MechanicsModel {
             .factorize(&a)
             .map_err(|source| MechError::Solve { day, source })?;
         self.stats.numeric += 1;
+        self.stats.numeric_flops += sys.solver.factor_flops();
         self.stats.seconds_numeric += t_num.elapsed().as_secs_f64();
         let t_solve = Instant::now();
         let mut x = b.clone();

@@ -462,14 +462,16 @@ pub struct SolverSettings {
     /// Contact passes per step before the step fails (an error naming the
     /// date); default 60.
     pub contact_max_iterations: u32,
-    /// Active set: solve a pass whose closed joint points differ from the
-    /// factored ones by the capacitance correction on the step's factor
-    /// (exact, no new factorisation) while that is cheaper than
-    /// refactorising; default true. `false` refactorises at every change
+    /// Active set: solve a pass whose closed joint points or intact grout
+    /// layers differ from the factored ones by the capacitance correction
+    /// on the step's factor (exact, no new factorisation) while that is
+    /// cheaper than refactorising; default true. `false` refactorises at every change
     /// (the path it is compared with in `groutready study perf`).
     pub contact_capacitance: bool,
     /// Fill-reducing ordering of the mechanical factorisation: `metis`
-    /// (nested dissection, default) or `amd`.
+    /// (nested dissection of the complete dam restricted to each live set,
+    /// default), `metis_live_set` (nested dissection of each live set) or
+    /// `amd`.
     pub ordering: OrderingKind,
 }
 
@@ -477,15 +479,20 @@ pub struct SolverSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OrderingKind {
-    /// METIS's multilevel nested dissection. On the mechanical systems it
-    /// fills less than AMD at every size measured: the complete demo arch
-    /// with its joint pairs (25,458 dofs) 8.0M entries of L and 2.8 Gflop
-    /// per factorisation against 10.2M and 5.0 Gflop (`groutready study
-    /// perf`); the complete Xiaowan-like arch without pairs (410,904 dofs)
-    /// 169M against 248M, 6.1 s against 8.8 s on 2 cores
-    /// (`examples/factor_orderings.rs`). Its analysis costs more (0.18 s
-    /// against 0.09 s on the demo), paid once per live set.
+    /// METIS's multilevel nested dissection of the complete dam, computed
+    /// once and restricted to each live set (one METIS call per run instead
+    /// of one per pour). On the mechanical systems nested dissection fills
+    /// less than AMD at every size measured: the complete demo arch with
+    /// its joint pairs (25,458 dofs) 8.0M entries of L and 2.8 Gflop per
+    /// factorisation against 10.2M and 5.0 Gflop (`groutready study perf`);
+    /// the complete Xiaowan-like arch without pairs (410,904 dofs) 169M
+    /// against 248M, 6.1 s against 8.8 s on 2 cores
+    /// (`examples/factor_orderings.rs`). The restriction's fill against a
+    /// METIS call per live set is in the README ("Where the time goes").
     Metis,
+    /// METIS's nested dissection of each live set's own pattern (one call
+    /// per pour: 0.18 s each on the demo).
+    MetisLiveSet,
     /// faer's approximate minimum degree.
     Amd,
 }

@@ -360,6 +360,17 @@ fn print_mechanics(m: &MechStats) {
             / m.steps.max(1) as f64
     );
     println!(
+        "{:<22} orderings: {} METIS calls, {:.2} s; symbolic analyses {:.2} s; over the {} live sets Σ L entries {:.1}M, Σ flops of one factorisation {:.2} Gflop; numeric factorisations {:.1} Gflop in all",
+        "",
+        m.metis_calls,
+        m.seconds_ordering,
+        m.seconds_analysis,
+        m.symbolic,
+        m.live_sets_factor_nnz as f64 / 1e6,
+        m.live_sets_factor_flops / 1e9,
+        m.numeric_flops / 1e9
+    );
+    println!(
         "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined), {} columns, largest rank {}, {:.2} s",
         "",
         r.step,

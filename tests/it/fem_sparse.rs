@@ -565,13 +565,14 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
         let mut x_ref = rhs1.clone();
         fresh.solve_in_place(&mut x_ref).unwrap();
         let columns = cap.stats.columns;
-        let x = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let x = corrected.x;
         let scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let diff = x
             .iter()
             .zip(&x_ref)
             .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-        let changed = cap.changes(&fixed).len();
+        let changed = cap.changes(&a, &fixed).len();
         eprintln!(
             "{name}: {changed} changed rows, max difference {:.2e} of {scale:.3e}",
             diff
@@ -587,6 +588,13 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
             groutready::fem::capacitance::constrained_residual(&a, &fixed, &presc, &rhs, x)
         };
         assert!(unformed(&x) < 1e-12, "{name}");
+        // the residual the correction returns is the same quantity
+        assert!(
+            (corrected.residual - unformed(&x)).abs() <= 1e-14,
+            "{name}: {:e} vs {:e}",
+            corrected.residual,
+            unformed(&x)
+        );
         let mut off = x.clone();
         off[1] += 0.1;
         off[2] -= 0.2;
@@ -603,6 +611,89 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
             );
         }
     }
+}
+
+/// Springs added to and removed from the diagonal of free rows (a grout
+/// layer bonded, one cracked), alone and with rows fixed and released, are
+/// corrected on the factor of the old springs to round-off of a fresh
+/// factorisation of the new matrix; their Z columns are those of fixed rows.
+#[test]
+fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
+    let mut rng = Rng(37);
+    let g = grid([6, 5, 4], 1.0, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(&g, 1.0, false);
+    let scale = a.diag().iter().fold(0.0f64, |m, v| m.max(*v));
+    // springs of the base on every 9th row, of the new matrix on every 6th
+    // (some kept, some removed, some added), 10× the stiffest diagonal
+    let springs = |every: usize| {
+        let mut m = a.clone();
+        for i in (0..n).filter(|i| i % every == 3) {
+            m.add_diag(i, 10.0 * scale * (1.0 + (i % 4) as f64));
+        }
+        m
+    };
+    let (a0, a1) = (springs(9), springs(6));
+    let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+    let presc: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+    let rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
+    let mut m0 = a0.clone();
+    m0.apply_dirichlet(&base);
+    let mut solver =
+        CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq).unwrap();
+    solver.factorize(&m0).unwrap();
+    let mut cap = Capacitance::with_diagonal(base.clone(), a0.diag());
+    let both = |i: usize| (base[i] && !i.is_multiple_of(10)) || i % 7 == 1;
+    let cases: [(&str, &dyn Fn(usize) -> bool); 2] = [("springs", &|i| base[i]), ("both", &both)];
+    for (name, rule) in cases {
+        let fixed: Vec<bool> = (0..n).map(rule).collect();
+        let mut m1 = a1.clone();
+        let mut rhs1 = rhs.clone();
+        m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
+        let mut fresh =
+            CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq)
+                .unwrap();
+        fresh.factorize(&m1).unwrap();
+        let mut x_ref = rhs1.clone();
+        fresh.solve_in_place(&mut x_ref).unwrap();
+        let changes = cap.changes(&a1, &fixed);
+        let diagonal = changes
+            .iter()
+            .filter(|c| c.1 == groutready::fem::RowChange::Diagonal)
+            .count();
+        let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
+        let x_scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = corrected
+            .x
+            .iter()
+            .zip(&x_ref)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        eprintln!(
+            "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}, residual {:.2e}",
+            changes.len(),
+            diff,
+            corrected.residual
+        );
+        assert!(diagonal > 10, "{name}: springs changed on free rows");
+        assert!(
+            diff <= 1e-12 * x_scale,
+            "{name}: differs by {diff:.3e} (scale {x_scale:.3e})"
+        );
+        assert!(
+            relative_residual(&m1, &corrected.x, &rhs1) < 1e-12,
+            "{name}"
+        );
+    }
+    // a diagonal change shares the column of the row fixed at the same dof
+    let fixed: Vec<bool> = (0..n).map(|i| base[i] || i % 6 == 3).collect();
+    let before = cap.stats.columns;
+    let _ = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
+    let spring_rows_base_free = (0..n).filter(|&i| i % 6 == 3 && !base[i]).count();
+    assert!(spring_rows_base_free > 0);
+    assert!(
+        cap.stats.columns - before < spring_rows_base_free as u64,
+        "the rows newly fixed reuse the spring rows' columns"
+    );
 }
 
 /// Timing of pattern, assembly, symbolic and numeric Cholesky and one solve
