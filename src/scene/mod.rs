@@ -170,6 +170,12 @@ pub struct JointSettings {
     /// cracks it and the zone is recorded as reopened; default 1.0e6.
     #[serde(default = "default_bond_strength")]
     pub bond_strength_pa: f64,
+    /// Distance \[m\] of a zone's grout stops from the upstream and
+    /// downstream faces, along the joint face: the zone's deciding aperture
+    /// (`min`) is the smallest inside them; default 1.0 (an assumption: grout
+    /// stops sit within about a metre of each face).
+    #[serde(default = "default_grout_stop_inset")]
+    pub grout_stop_inset_m: f64,
 }
 
 fn default_grout_modulus() -> f64 {
@@ -183,6 +189,9 @@ fn default_grout_min_thickness() -> f64 {
 }
 fn default_bond_strength() -> f64 {
     1.0e6
+}
+fn default_grout_stop_inset() -> f64 {
+    1.0
 }
 
 fn default_mu_static() -> f64 {
