@@ -107,10 +107,13 @@ impl fmt::Display for Epoch {
 }
 
 /// Where on a grouting zone an aperture or temperature is read: three
-/// points at mid-height of the zone (the upstream face, the centre, the
-/// downstream face, each inside the zone's grout stops), or the zone's
-/// smallest aperture over all of its joint points (`Min`). The spelling in
-/// every CSV, JSON and scene key is the lower-case name.
+/// points at mid-height of the zone (on the upstream face, at the centre, on
+/// the downstream face: the face points lie outside the grout stops), or the
+/// zone's smallest aperture inside its grout stops (`Min`: at the joint
+/// nodes off the faces, or the minimum of the aperture field over the
+/// zone's joint area at least `[joints] grout_stop_inset_m` from both
+/// faces, `mechanics::grout_stops`). The
+/// spelling in every CSV, JSON and scene key is the lower-case name.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, Default,
 )]
@@ -119,7 +122,7 @@ pub enum ZonePoint {
     Upstream,
     Center,
     Downstream,
-    /// the smallest aperture over the zone's joint points
+    /// the smallest aperture inside the zone's grout stops
     #[default]
     Min,
 }

@@ -35,12 +35,13 @@
 //! the joints by `tests/it/joint_two_blocks.rs` and `tests/it/joint_friction.rs`.
 
 pub mod contact_step;
+pub mod grout_stops;
 pub mod joints;
 pub mod live;
 pub mod model;
 pub mod settings;
 pub mod supports;
 
-pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports};
+pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};
 pub use supports::SupportError;

@@ -15,6 +15,7 @@ use crate::scene::OrderingKind;
 use crate::vocab::JointState;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, RefactorCounts, StepSystem};
+use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
 use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
 use super::settings::{JointMechanics, MechanicsSettings};
@@ -85,6 +86,19 @@ impl Supports {
         fixed.dedup();
         Supports { fixed }
     }
+}
+
+/// A zone's smallest aperture inside its grout stops
+/// ([`MechanicsModel::zone_min_aperture`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ZoneMinimum {
+    /// aperture [m]
+    pub aperture: f64,
+    pub state: JointState,
+    /// the side-a nodes the aperture is interpolated between, with their
+    /// weights (the second weight is 0 at a node): the temperature there is
+    /// read with the same weights
+    pub nodes: [(u32, f64); 2],
 }
 
 /// Counters for the benchmark.
@@ -211,8 +225,8 @@ pub struct MechanicsModel {
     joint_settings: JointSolveSettings,
     /// joint point of each side-a node
     point_of_a: HashMap<u32, u32>,
-    /// per zone, its points inside the grout stops
-    zone_inner_points: HashMap<(u32, u32), Vec<u32>>,
+    /// per zone, where its aperture is sampled inside the grout stops
+    zone_stop_samples: HashMap<(u32, u32), Vec<StopSample>>,
     pub state: MechState,
     pub stats: MechStats,
 }
@@ -389,7 +403,7 @@ impl MechanicsModel {
                 .enumerate()
                 .map(|(i, p)| (p.a, i as u32))
                 .collect(),
-            zone_inner_points: inside_grout_stops(mesh, &points),
+            zone_stop_samples: inside_grout_stops(mesh, &points, settings.joint.grout_stop_inset_m),
             state,
             stats,
             points,
@@ -943,17 +957,44 @@ impl MechanicsModel {
         Some((value, label))
     }
 
-    /// Smallest aperture over the points of a zone: (aperture [m], state, node a).
-    /// The smallest aperture over the zone inside its grout stops (the
-    /// zone's joint points off the dam's faces), with its label and node.
-    pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<(f64, JointState, u32)> {
-        self.zone_inner_points
+    /// The zone's smallest aperture inside its grout stops: the minimum of
+    /// the aperture field over its samples ([`super::grout_stops`]). None
+    /// until both blocks exist at one of them.
+    pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<ZoneMinimum> {
+        self.zone_stop_samples
             .get(&(joint, zone))?
             .iter()
-            .map(|&p| (p as usize, &self.state.joints[p as usize]))
-            .filter(|(_, st)| st.paired)
-            .map(|(p, st)| (st.aperture(), st.label(), self.points[p].a))
-            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .filter_map(|s| self.sample_aperture(s))
+            .min_by(|x, y| x.aperture.total_cmp(&y.aperture))
+    }
+
+    /// The aperture field at one sample, with its state: the heavier
+    /// point's, except that a sample between an open point and a closed one
+    /// is open (its aperture weighs in the opening).
+    fn sample_aperture(&self, s: &StopSample) -> Option<ZoneMinimum> {
+        let used = if s.weights[1] > 0.0 { 2 } else { 1 };
+        let st: Vec<&JointPointState> = s.points[..used]
+            .iter()
+            .map(|&p| &self.state.joints[p as usize])
+            .collect();
+        if st.iter().any(|p| !p.paired) {
+            return None;
+        }
+        let aperture = (0..used).map(|k| s.weights[k] * st[k].aperture()).sum();
+        let heavier = usize::from(used == 2 && s.weights[1] > s.weights[0]);
+        let mut state = st[heavier].label();
+        if st
+            .iter()
+            .any(|p| p.label() == JointState::Open && p.aperture() > 0.0)
+        {
+            state = JointState::Open;
+        }
+        let node = |k: usize| self.points[s.points[k] as usize].a;
+        Some(ZoneMinimum {
+            aperture,
+            state,
+            nodes: [(node(0), s.weights[0]), (node(1), s.weights[1])],
+        })
     }
 
     /// Number of mechanical dofs live in the last step (0 before the first).
@@ -995,29 +1036,4 @@ fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettin
         bond_strength: joint.bond_strength_pa,
         capacitance: joint.capacitance,
     }
-}
-
-/// The joint points of each zone that lie inside its grout stops: off the
-/// dam's outer faces, where the grout stops that seal a zone sit. A zone with
-/// no such point (one element across) keeps all of its points.
-fn inside_grout_stops(mesh: &Mesh, points: &[JointPoint]) -> HashMap<(u32, u32), Vec<u32>> {
-    let mut on_face = vec![false; mesh.nodes.len()];
-    for f in mesh.surfaces.iter().filter(|f| f.kind != SurfaceKind::Far) {
-        let conn = &mesh.elements[f.elem as usize];
-        for &k in &crate::fem::hex8::FACES[f.face as usize] {
-            on_face[conn[k] as usize] = true;
-        }
-    }
-    let mut all: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-    let mut inner: HashMap<(u32, u32), Vec<u32>> = HashMap::new();
-    for (i, p) in points.iter().enumerate() {
-        all.entry((p.joint, p.zone)).or_default().push(i as u32);
-        if !on_face[p.a as usize] {
-            inner.entry((p.joint, p.zone)).or_default().push(i as u32);
-        }
-    }
-    for (k, v) in inner {
-        all.insert(k, v);
-    }
-    all
 }

@@ -70,6 +70,10 @@ pub struct JointMechanics {
     pub bond_strength_pa: f64,
     /// Capacitance correction of contact-set changes (`solver.contact_capacitance`).
     pub capacitance: bool,
+    /// Distance of the grout stops from the upstream and downstream faces
+    /// [m], along the joint face: the zone minimum is read inside them
+    /// ([`super::grout_stops`]); None: at the joint nodes off the faces.
+    pub grout_stop_inset_m: Option<f64>,
 }
 
 /// Settings of the mechanical model ([`MechanicsModel::new`](super::MechanicsModel::new)).
@@ -98,7 +102,7 @@ impl MechanicsSettings {
     /// `effects`, `[concrete]` (`modulus`, `poisson`, `expansion_per_c`,
     /// `density_kg_m3`, `creep`, `autogenous`), `[rock]` (`modulus_pa`,
     /// `poisson`, `expansion_per_c`, `density_kg_m3`), `[joints]` (friction,
-    /// initial gap, grout) and `[solver]` (`contact`,
+    /// initial gap, grout, grout stops) and `[solver]` (`contact`,
     /// `contact_max_iterations`, `contact_capacitance`, `ordering`). `rock.poisson` defaults to
     /// [`DEFAULT_ROCK_POISSON`], an absent expansion to
     /// [`NO_THERMAL_EXPANSION`]; creep and autogenous laws count only with
@@ -145,6 +149,7 @@ impl MechanicsSettings {
                 grout_shear_modulus_pa: j.grout_shear_modulus_pa,
                 grout_min_thickness_m: j.grout_min_thickness_m,
                 bond_strength_pa: j.bond_strength_pa,
+                grout_stop_inset_m: j.grout_stop_inset_m,
             },
             ordering: scene.solver.ordering,
         })

@@ -170,6 +170,14 @@ pub struct JointSettings {
     /// cracks it and the zone is recorded as reopened; default 1.0e6.
     #[serde(default = "default_bond_strength")]
     pub bond_strength_pa: f64,
+    /// Distance \[m\] of a zone's grout stops from the upstream and
+    /// downstream faces, along the joint face: the zone's deciding aperture
+    /// (`min`) is the smallest of the aperture field at least this far from
+    /// both faces. Absent (the default): the smallest at the joint nodes off
+    /// the faces, i.e. one element in from each face, a point that moves
+    /// with the mesh across the thickness (see `mechanics::grout_stops`).
+    #[serde(default)]
+    pub grout_stop_inset_m: Option<f64>,
 }
 
 fn default_grout_modulus() -> f64 {

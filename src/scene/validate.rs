@@ -89,7 +89,7 @@ fn lifts_and_zones(s: &Scene) -> Check {
     Ok(())
 }
 
-/// Friction, initial gap and grout layer of the joints.
+/// Friction, initial gap, grout layer and grout stops of the joints.
 fn joints(j: &JointSettings) -> Check {
     if !(j.mu_static.is_finite() && j.mu_static >= 0.0) {
         return Err(SceneError::invalid(
@@ -115,7 +115,11 @@ fn joints(j: &JointSettings) -> Check {
     positive("joints.grout_modulus_pa", j.grout_modulus_pa)?;
     positive("joints.grout_shear_modulus_pa", j.grout_shear_modulus_pa)?;
     positive("joints.grout_min_thickness_m", j.grout_min_thickness_m)?;
-    positive("joints.bond_strength_pa", j.bond_strength_pa)
+    positive("joints.bond_strength_pa", j.bond_strength_pa)?;
+    match j.grout_stop_inset_m {
+        Some(inset) => non_negative("joints.grout_stop_inset_m", inset),
+        None => Ok(()),
+    }
 }
 
 /// The concrete's thermal properties and adiabatic rise (required by

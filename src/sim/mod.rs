@@ -558,13 +558,18 @@ impl<'a> Simulation<'a> {
                                 .unwrap_or(f64::NAN),
                         })
                 }
-                None => m.zone_min_aperture(col.zone.joint, col.zone.zone).map(
-                    |(aperture, state, node)| JointSample {
-                        aperture,
-                        state,
-                        temperature: node_temp(node),
-                    },
-                ),
+                None => m
+                    .zone_min_aperture(col.zone.joint, col.zone.zone)
+                    .map(|z| JointSample {
+                        aperture: z.aperture,
+                        state: z.state,
+                        temperature: z
+                            .nodes
+                            .iter()
+                            .filter(|&&(_, w)| w > 0.0)
+                            .map(|&(node, w)| w * node_temp(node))
+                            .sum(),
+                    }),
             };
             row.push(sample);
         }

@@ -20,6 +20,7 @@ mod fem_elements;
 mod fem_sparse;
 mod hard_cases;
 mod joint_friction;
+mod joint_grout_stops;
 mod joint_grouting;
 mod joint_two_blocks;
 mod material_creep;

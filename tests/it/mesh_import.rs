@@ -224,6 +224,7 @@ fn a_file_s_differences_give_the_same_dam() {
             "{scene}: joint copies merged"
         );
         let got = dam::build(&raw, lift, zone).unwrap();
+        crate::joint_grout_stops::assert_full_rows(&got, scene);
         assert_eq!(
             got.nodes.len(),
             m.nodes.len(),

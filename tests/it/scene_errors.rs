@@ -437,3 +437,19 @@ fn poisson_ratio_out_of_range() {
         "models/x.toml:25:11: concrete.poisson must be in [0, 0.5), got 0.5"
     );
 }
+
+#[test]
+fn grout_stop_inset_must_be_a_distance() {
+    for (value, found) in [("-0.5", "-0.5"), ("nan", "NaN")] {
+        let text = replaced(
+            BASE,
+            "zone_height_m = 9.0",
+            &format!("zone_height_m = 9.0\ngrout_stop_inset_m = {value}"),
+        );
+        let e = err(&text);
+        assert!(
+            e.contains("joints.grout_stop_inset_m") && e.contains(found),
+            "{e}"
+        );
+    }
+}
