@@ -558,20 +558,11 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
         let mut m1 = a.clone();
         let mut rhs1 = rhs.clone();
         m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
-        let mut fresh =
-            CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq)
-                .unwrap();
-        fresh.factorize(&m1).unwrap();
-        let mut x_ref = rhs1.clone();
-        fresh.solve_in_place(&mut x_ref).unwrap();
+        let x_ref = fresh_solution(&m1, &rhs1);
         let columns = cap.stats.columns;
         let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
         let x = corrected.x;
-        let scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = x
-            .iter()
-            .zip(&x_ref)
-            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        let (diff, scale) = max_difference(&x, &x_ref);
         let changed = cap.changes(&a, &fixed).len();
         eprintln!(
             "{name}: {changed} changed rows, max difference {:.2e} of {scale:.3e}",
@@ -613,6 +604,26 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
     }
 }
 
+/// The solution of `m` (already constrained) by a fresh factorisation.
+fn fresh_solution(m: &SparseSym, rhs: &[f64]) -> Vec<f64> {
+    let mut fresh =
+        CholeskySolver::with_options(m.pattern().clone(), &Ordering::Amd, faer::Par::Seq).unwrap();
+    fresh.factorize(m).unwrap();
+    let mut x = rhs.to_vec();
+    fresh.solve_in_place(&mut x).unwrap();
+    x
+}
+
+/// The largest difference between `x` and `x_ref`, and the largest |x_ref|.
+fn max_difference(x: &[f64], x_ref: &[f64]) -> (f64, f64) {
+    let scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = x
+        .iter()
+        .zip(x_ref)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    (diff, scale)
+}
+
 /// Springs added to and removed from the diagonal of free rows (a grout
 /// layer bonded, one cracked), alone and with rows fixed and released, are
 /// corrected on the factor of the old springs to round-off of a fresh
@@ -650,24 +661,14 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
         let mut m1 = a1.clone();
         let mut rhs1 = rhs.clone();
         m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
-        let mut fresh =
-            CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq)
-                .unwrap();
-        fresh.factorize(&m1).unwrap();
-        let mut x_ref = rhs1.clone();
-        fresh.solve_in_place(&mut x_ref).unwrap();
+        let x_ref = fresh_solution(&m1, &rhs1);
         let changes = cap.changes(&a1, &fixed);
         let diagonal = changes
             .iter()
             .filter(|c| c.1 == groutready::fem::RowChange::Diagonal)
             .count();
         let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
-        let x_scale = x_ref.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = corrected
-            .x
-            .iter()
-            .zip(&x_ref)
-            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        let (diff, x_scale) = max_difference(&corrected.x, &x_ref);
         eprintln!(
             "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}, residual {:.2e}",
             changes.len(),
