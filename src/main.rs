@@ -139,6 +139,12 @@ enum StudyCommand {
         /// scenes too large for the mesh knobs.
         #[arg(long)]
         presets_only: bool,
+        /// Only the scene as given and the settings of these knobs (comma
+        /// separated: steps, multi-rate, capacity, theta, thermal solver,
+        /// mechanics step, across, along, layers, preset), against the
+        /// default reference: one knob's ladder in a fraction of the time.
+        #[arg(long, value_delimiter = ',')]
+        knobs: Vec<String>,
     },
     /// Weekly update: a plan from scratch, the same plan restarted from its
     /// run folder, and the plan after a schedule edit, timed (written to a
@@ -275,8 +281,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     out,
                     horizon_days,
                     presets_only,
+                    knobs,
                 },
-        } => study_accuracy(scene, out, horizon_days, presets_only),
+        } => study_accuracy(
+            scene,
+            out,
+            groutready::study::accuracy::AccuracyOptions {
+                horizon_days,
+                presets_only,
+                knobs,
+            },
+        ),
         Command::Study {
             what:
                 StudyCommand::Perf {
@@ -420,21 +435,15 @@ fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
 fn study_accuracy(
     scene: Option<PathBuf>,
     out: Option<PathBuf>,
-    horizon_days: Option<i64>,
-    presets_only: bool,
+    options: groutready::study::accuracy::AccuracyOptions,
 ) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/small_dam_joints.toml"));
     let out = out.unwrap_or_else(|| {
         let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
         PathBuf::from("runs").join(format!("{stem}_accuracy"))
     });
-    let table = groutready::study::accuracy::accuracy(
-        &scene,
-        &out,
-        horizon_days,
-        presets_only,
-        &mut |l| eprintln!("{l}"),
-    )?;
+    let table =
+        groutready::study::accuracy::accuracy(&scene, &out, &options, &mut |l| eprintln!("{l}"))?;
     print!("{}", groutready::study::accuracy::markdown(&table));
     println!("wrote {}", out.display());
     Ok(0)

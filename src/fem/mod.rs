@@ -30,6 +30,7 @@ pub mod capacitance;
 pub mod elasticity;
 pub mod error;
 pub mod hex8;
+pub mod hex8_modes;
 pub mod ordering;
 pub mod quad4;
 pub mod quadrature;

@@ -7,11 +7,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8::FACES;
+use crate::fem::hex8_modes::{self, Modes};
 use crate::fem::{CapacitanceStats, ElementError, SolveError, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::{AgeStepError, CreepLaw, Poisson};
 use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
-use crate::scene::OrderingKind;
+use crate::scene::{OrderingKind, SolidElement};
 use crate::vocab::JointState;
 
 use super::contact_step::{self, JointSolveSettings, JointStepError, RefactorCounts, StepSystem};
@@ -235,8 +236,12 @@ pub struct MechanicsModel {
 struct ElementTables {
     /// Gauss points of each element
     gauss: Vec<[SolidGauss; 8]>,
-    /// stiffness at unit modulus (the modulus ages, ν does not)
+    /// stiffness at unit modulus (the modulus ages, ν does not); with the
+    /// incompatible modes, the condensed one
     k_unit: Vec<Mat24>,
+    /// the incompatible modes of each element (`solver.element =
+    /// "hex8_incompatible"`; empty with the plain hex8)
+    modes: Vec<Modes>,
     /// Poisson's ratio
     nu: Vec<f64>,
     /// thermal expansion [1/°C], zero without the `thermal_strain` effect
@@ -256,6 +261,7 @@ impl ElementTables {
         let mut t = ElementTables {
             gauss: Vec::with_capacity(n_el),
             k_unit: Vec::with_capacity(n_el),
+            modes: vec![],
             nu: vec![],
             alpha: vec![],
             density: vec![],
@@ -274,8 +280,15 @@ impl ElementTables {
                     (r.poisson, r.expansion_per_c, r.density_kg_m3, false)
                 }
             };
-            t.k_unit
-                .push(elasticity::stiffness(&g, &elasticity::isotropic_d(1.0, n)));
+            let q = elasticity::poisson_matrix(n);
+            if settings.element == SolidElement::Hex8Incompatible {
+                let (k, m) = hex8_modes::modes(&coords, &g, &q)
+                    .map_err(|source| MechError::Element { element: e, source })?;
+                t.k_unit.push(k);
+                t.modes.push(m);
+            } else {
+                t.k_unit.push(elasticity::stiffness(&g, &q));
+            }
             t.gauss.push(g);
             t.nu.push(n);
             t.alpha.push(if settings.thermal_strain { a } else { 0.0 });
@@ -668,7 +681,11 @@ impl MechanicsModel {
             let eps = self.imposed_strain(e, &c, temps);
             if eps.iter().any(|g| g.iter().any(|&v| v != 0.0)) {
                 let d = elasticity::isotropic_d(c.e_eff, self.tables.nu[e]);
-                let load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
+                let mut load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
+                if let Some(m) = self.tables.modes.get(e) {
+                    let f_alpha = m.mode_load(&self.tables.gauss[e], &d, &eps);
+                    load = m.condense_load(&load, &f_alpha);
+                }
                 sys.add_element_vector(slot, &load, &self.points, &mut b);
             }
             coeffs.push(c);
@@ -823,9 +840,20 @@ impl MechanicsModel {
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
             let nu = Poisson(self.tables.nu[e]);
+            // the incompatible modes' amplitudes (E cancels: loads at E = 1)
+            let modes = self.tables.modes.get(e).map(|m| {
+                let q = elasticity::poisson_matrix(nu.0);
+                let f_alpha = m.mode_load(&self.tables.gauss[e], &q, &pseudo[slot]);
+                (m, m.amplitudes(&ue, &f_alpha))
+            });
             for (g, (gauss, imposed)) in self.tables.gauss[e].iter().zip(&pseudo[slot]).enumerate()
             {
-                let deps = elasticity::strain(gauss, &ue);
+                let mut deps = elasticity::strain(gauss, &ue);
+                if let Some((m, alpha)) = &modes {
+                    for (d, x) in deps.iter_mut().zip(m.strain(g, alpha)) {
+                        *d += x;
+                    }
+                }
                 let net: [f64; 6] = std::array::from_fn(|k| deps[k] - imposed[k]);
                 let ds = nu.q_apply(&net).map(|v| c.e_eff * v);
                 for (s, d) in self.state.stress[e][g].iter_mut().zip(ds) {

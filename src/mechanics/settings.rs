@@ -3,7 +3,7 @@
 //! the joints' contact and grout parameters.
 
 use crate::material::{AutogenousLaw, CreepLaw, ModulusLaw};
-use crate::scene::{ContactSolverKind, Effect, OrderingKind, Scene};
+use crate::scene::{ContactSolverKind, Effect, OrderingKind, Scene, SolidElement};
 use crate::vocab::Invalid;
 
 /// Poisson's ratio of a rock whose scene gives none (`rock.poisson` absent).
@@ -95,6 +95,8 @@ pub struct MechanicsSettings {
     pub joint: JointMechanics,
     /// Fill-reducing ordering of the step's factorisation (`solver.ordering`).
     pub ordering: OrderingKind,
+    /// The solid element (`solver.element`).
+    pub element: SolidElement,
 }
 
 impl MechanicsSettings {
@@ -152,6 +154,7 @@ impl MechanicsSettings {
                 grout_stop_inset_m: j.grout_stop_inset_m,
             },
             ordering: scene.solver.ordering,
+            element: scene.solver.element,
         })
     }
 }

@@ -163,6 +163,8 @@ pub fn generate_arch(
         rock_margin_m: p.rock_margin_m,
         rock_margin_elements: p.rock_margin_elements,
         rock_grading_ratio: p.rock_grading_ratio,
+        face_element_m: p.face_element_m,
+        joint_element_m: p.joint_element_m,
         first_cells_m: [
             (p.crest_radius_m - 0.5 * p.crest_thickness_m) * p.central_angle_deg.to_radians()
                 / (p.n_blocks as f64 * p.elements_per_block as f64),
@@ -175,10 +177,21 @@ pub fn generate_arch(
     let rings = rings(p, &zs)?;
     let phi_total = p.central_angle_deg.to_radians();
     let nd = p.n_blocks as usize * p.elements_per_block as usize;
+    let epb = p.elements_per_block as usize;
+    // the joint element is measured on the crest's centre line
+    let crest_block =
+        (p.crest_radius_m - 0.5 * p.crest_thickness_m) * phi_total / p.n_blocks as f64;
+    let a = grid::graded_fractions(epb, crest_block, p.joint_element_m);
     let along: Vec<f64> = (0..=nd)
-        .map(|i| -0.5 * phi_total + phi_total * i as f64 / nd as f64)
+        .map(|i| match p.joint_element_m {
+            None => -0.5 * phi_total + phi_total * i as f64 / nd as f64,
+            Some(_) => {
+                let (b, e) = (i / epb, i % epb);
+                -0.5 * phi_total + phi_total * (b as f64 + a[e]) / p.n_blocks as f64
+            }
+        })
         .collect();
-    let pos = node_positions(rings.as_slice(), &row, &rock, &along, &zs);
+    let pos = node_positions(rings.as_slice(), &row, &rock, &along, &zs, p.face_element_m);
     let blocks = foundation_layers(p, &layer_z, zone_lifts)
         .into_iter()
         .map(|b| (b, n_layers as u32 - b))
@@ -204,6 +217,10 @@ pub(super) struct RowCounts {
     pub rock_margin_elements: u32,
     /// Growth of the rock cells away from the dam (1: the uniform counts).
     pub rock_grading_ratio: f64,
+    /// The concrete's face element across (None: equal elements across).
+    pub face_element_m: Option<f64>,
+    /// The element along next to each joint (None: equal elements along).
+    pub joint_element_m: Option<f64>,
     /// The concrete cells the graded rock starts from \[m\]: along the arc
     /// (beyond the abutments), across (upstream and downstream), and the
     /// lift height (below).
@@ -226,6 +243,8 @@ pub(super) fn block_row(c: &RowCounts) -> Result<(BlockRow, RockSpacing), MeshEr
         at_least("rock_margin_elements", c.rock_margin_elements, 1)?;
     }
     grid::grading_ratio(c.rock_grading_ratio)?;
+    grid::end_element("face_element_m", c.face_element_m)?;
+    grid::end_element("joint_element_m", c.joint_element_m)?;
     let rock = RockSpacing::of(c);
     let row = BlockRow {
         n_blocks: c.n_blocks,
@@ -369,6 +388,10 @@ pub(super) trait ArchPlan {
     /// across position `across`, moved `ext` metres along the arch's tangent
     /// at `u` (towards increasing `u`; the rock beyond the abutments).
     fn plan_point(&self, k: usize, u: f64, across: Across, ext: f64) -> [f64; 2];
+
+    /// The dam's thickness at level `k` and along-parameter `u` \[m\], as
+    /// [`Across::Dam`] measures it (the cells across are graded on it).
+    fn thickness(&self, k: usize, u: f64) -> f64;
 }
 
 impl ArchPlan for [Ring] {
@@ -382,19 +405,26 @@ impl ArchPlan for [Ring] {
         let (s, c) = phi.sin_cos();
         [r * s + ext * c, rg.yc - r * c + dy + ext * s]
     }
+
+    fn thickness(&self, k: usize, _phi: f64) -> f64 {
+        self[k].t
+    }
 }
 
 /// Grid nodes (i fastest) of the levels `zs`: the dam's i-lines at the
 /// along-parameters `along` (`n_blocks·elements_per_block + 1` of them),
 /// across it from the upstream to the downstream face, the upstream margin
 /// along the face's normal, the downstream one along +y, the margins beyond
-/// the abutments along the end tangents (module doc, "Rock").
+/// the abutments along the end tangents (module doc, "Rock"); the dam's
+/// cells across equal, or graded from a `face` element at both faces on the
+/// local thickness ([`grid::graded_fractions`]).
 pub(super) fn node_positions(
     plan: &(impl ArchPlan + ?Sized),
     row: &BlockRow,
     rock: &RockSpacing,
     along_u: &[f64],
     zs: &[f64],
+    face: Option<f64>,
 ) -> Vec<[f64; 3]> {
     let (ma, mc) = (rock.along.count, rock.across.count);
     let na = row.elements_across as usize;
@@ -415,15 +445,20 @@ pub(super) fn node_positions(
 
     let mut pos = Vec::with_capacity((ni + 1) * (nj + 1) * zs.len());
     for (k, &z) in zs.iter().enumerate() {
+        // the fractions across of every i-line of this level
+        let fractions: Vec<Vec<f64>> = along
+            .iter()
+            .map(|&(u, _)| grid::graded_fractions(na, plan.thickness(k, u), face))
+            .collect();
         for j in 0..=nj {
-            let across = if j < mc {
-                Across::Upstream(rock.across.distance(mc - j))
-            } else if j <= mc + na {
-                Across::Dam((j - mc) as f64 / na as f64)
-            } else {
-                Across::Downstream(rock.across.distance(j - mc - na))
-            };
-            for &(u, ext) in &along {
+            for (i, &(u, ext)) in along.iter().enumerate() {
+                let across = if j < mc {
+                    Across::Upstream(rock.across.distance(mc - j))
+                } else if j <= mc + na {
+                    Across::Dam(fractions[i][j - mc])
+                } else {
+                    Across::Downstream(rock.across.distance(j - mc - na))
+                };
                 let [x, y] = plan.plan_point(k, u, across, ext);
                 pos.push([x, y, z]);
             }

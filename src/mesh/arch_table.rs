@@ -132,6 +132,21 @@ pub struct ArchTableGeometry {
     pub elements_per_block: u32,
     /// Elements across the thickness.
     pub elements_across: u32,
+    /// Thickness \[m\] of the element layer across at the upstream and
+    /// downstream faces; the others grow by one ratio towards the middle of
+    /// the section (`grid::graded_fractions`). Absent (default): equal
+    /// elements across. Set to the grout stops' inset, the zone minimum is
+    /// read on node rows and the faces' warm layer is resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face_element_m: Option<f64>,
+    /// Width \[m\] of the element along the block next to each transverse
+    /// joint; the others grow by one ratio towards the block's middle
+    /// (`grid::graded_fractions`; an arch's at the crest's reference line).
+    /// Absent (default): equal elements along. The joints' faces cool and
+    /// warm first, and the block's shortening near them is what opens the
+    /// joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_element_m: Option<f64>,
     /// Rock depth below the deepest foundation \[m\].
     pub rock_depth_m: f64,
     /// Rock element layers below the deepest foundation.
@@ -289,6 +304,12 @@ impl ArchPlan for [Level] {
         };
         [cx + off * s + ext * c, cy - off * c + dy + ext * s]
     }
+
+    fn thickness(&self, k: usize, phi: f64) -> f64 {
+        let lv = &self[k];
+        let side = if phi < 0.0 { &lv.left } else { &lv.right };
+        lv.thickness(side, phi.abs())
+    }
 }
 
 /// Build the mesh of an [`ArchTableGeometry`] whose tables are loaded, with
@@ -318,6 +339,8 @@ pub fn generate_arch_table(
         rock_margin_m: g.rock_margin_m,
         rock_margin_elements: g.rock_margin_elements,
         rock_grading_ratio: g.rock_grading_ratio,
+        face_element_m: g.face_element_m,
+        joint_element_m: g.joint_element_m,
         first_cells_m: [
             g.crest_length_m / (g.n_blocks as f64 * g.elements_per_block as f64),
             (base_row.crown_downstream_y_m - base_row.crown_upstream_y_m)
@@ -344,7 +367,14 @@ pub fn generate_arch_table(
         .iter()
         .map(|&z| level(g, tables, &crest_curves, z))
         .collect::<Result<Vec<Level>, MeshError>>()?;
-    let pos = arch::node_positions(levels.as_slice(), &row, &rock, &along, &zs);
+    let pos = arch::node_positions(
+        levels.as_slice(),
+        &row,
+        &rock,
+        &along,
+        &zs,
+        g.face_element_m,
+    );
     let blocks = bounds
         .windows(2)
         .map(|w| {
@@ -443,8 +473,12 @@ fn grid_angles(
     let mut along = Vec::with_capacity(bounds.len() * epb);
     for (b, w) in bounds.windows(2).enumerate() {
         let first = if b == 0 { 0 } else { 1 };
+        let a = grid::graded_fractions(epb, w[1] - w[0], g.joint_element_m);
         for e in first..=epb {
-            let s = w[0] + (w[1] - w[0]) * e as f64 / epb as f64;
+            let s = match g.joint_element_m {
+                None => w[0] + (w[1] - w[0]) * e as f64 / epb as f64,
+                Some(_) => w[0] + (w[1] - w[0]) * a[e],
+            };
             along.push(crest_angle(crest, s - s_crown)?);
         }
     }

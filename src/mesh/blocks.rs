@@ -96,6 +96,8 @@ fn check_params(p: &BlocksGeometry, lift_height: f64, zone_height: f64) -> Resul
         at_least("rock_margin_elements", p.rock_margin_elements, 1)?;
     }
     grid::grading_ratio(p.rock_grading_ratio)?;
+    grid::end_element("face_element_m", p.face_element_m)?;
+    grid::end_element("joint_element_m", p.joint_element_m)?;
     Ok(zone_lifts)
 }
 
@@ -152,14 +154,31 @@ fn node_positions(
     let epb = p.elements_per_block as usize;
     let na = p.elements_across as usize;
     let length = p.n_blocks as f64 * p.block_length_m;
-    let xs = axis(
+    let mut xs = axis(
         &rock.along,
         p.n_blocks as usize * epb,
         p.block_length_m,
         epb,
         length,
     );
-    let ys = axis(&rock.across, na, p.thickness_m, na, p.thickness_m);
+    if p.joint_element_m.is_some() {
+        let m = rock.along.count;
+        let a = grid::graded_fractions(epb, p.block_length_m, p.joint_element_m);
+        for b in 0..p.n_blocks as usize {
+            let x0 = b as f64 * p.block_length_m;
+            for (e, f) in a.iter().enumerate().skip(1).take(epb - 1) {
+                xs[m + b * epb + e] = x0 + f * p.block_length_m;
+            }
+        }
+    }
+    let mut ys = axis(&rock.across, na, p.thickness_m, na, p.thickness_m);
+    if p.face_element_m.is_some() {
+        let m = rock.across.count;
+        let a = grid::graded_fractions(na, p.thickness_m, p.face_element_m);
+        for (y, f) in ys[m..=m + na].iter_mut().zip(a) {
+            *y = f * p.thickness_m;
+        }
+    }
     let zs = row.level_z(p.base_elevation_m, p.rock_depth_m, rock.below, layer_z);
     let mut pos = Vec::with_capacity(xs.len() * ys.len() * zs.len());
     for &z in &zs {

@@ -386,6 +386,8 @@ mod tests {
             rock_margin_m: margin,
             rock_margin_elements: 2,
             rock_grading_ratio: ratio,
+            face_element_m: None,
+            joint_element_m: None,
             base_elevation_m: 10.0,
         }
     }
@@ -411,6 +413,8 @@ mod tests {
             rock_margin_m: margin,
             rock_margin_elements: 2,
             rock_grading_ratio: ratio,
+            face_element_m: None,
+            joint_element_m: None,
         }
     }
 

@@ -72,6 +72,21 @@ pub struct BlocksGeometry {
     /// Element layers per lift (1 = one layer per lift).
     #[serde(default = "one")]
     pub layers_per_lift: u32,
+    /// Thickness \[m\] of the element layer across at the upstream and
+    /// downstream faces; the others grow by one ratio towards the middle of
+    /// the section (`grid::graded_fractions`). Absent (default): equal
+    /// elements across. Set to the grout stops' inset, the zone minimum is
+    /// read on node rows and the faces' warm layer is resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face_element_m: Option<f64>,
+    /// Width \[m\] of the element along the block next to each transverse
+    /// joint; the others grow by one ratio towards the block's middle
+    /// (`grid::graded_fractions`; an arch's at the crest's reference line).
+    /// Absent (default): equal elements along. The joints' faces cool and
+    /// warm first, and the block's shortening near them is what opens the
+    /// joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_element_m: Option<f64>,
     /// Rock depth under the blocks \[m\]; 0 = no rock (blocks on a rigid/adiabatic base).
     #[serde(default)]
     pub rock_depth_m: f64,
@@ -137,6 +152,21 @@ pub struct ArchGeometry {
     pub elements_per_block: u32,
     /// Elements across the thickness.
     pub elements_across: u32,
+    /// Thickness \[m\] of the element layer across at the upstream and
+    /// downstream faces; the others grow by one ratio towards the middle of
+    /// the section (`grid::graded_fractions`). Absent (default): equal
+    /// elements across. Set to the grout stops' inset, the zone minimum is
+    /// read on node rows and the faces' warm layer is resolved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face_element_m: Option<f64>,
+    /// Width \[m\] of the element along the block next to each transverse
+    /// joint; the others grow by one ratio towards the block's middle
+    /// (`grid::graded_fractions`; an arch's at the crest's reference line).
+    /// Absent (default): equal elements along. The joints' faces cool and
+    /// warm first, and the block's shortening near them is what opens the
+    /// joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_element_m: Option<f64>,
     /// Rock depth below the deepest foundation \[m\].
     pub rock_depth_m: f64,
     /// Rock element layers below the deepest foundation.

@@ -121,6 +121,61 @@ impl Spacing {
     }
 }
 
+/// Where the `n + 1` grid lines over a segment `t` long lie, as fractions
+/// 0 = a₀ < … < aₙ = 1: across a section from its upstream face
+/// (`face_element_m`), or along a block from its left joint
+/// (`joint_element_m`).
+///
+/// Without `face` (or where `n·face ≥ t`, or `n ≤ 2`) the cells are equal:
+/// aⱼ = j/n, by the expression of the first version. With it, the cells at
+/// both ends are `face` long and grow by one ratio r ≥ 1 towards the
+/// middle, cell i being face·r^min(i, n−1−i); r is the root of
+/// Σᵢ face·r^min(i, n−1−i) = t (the sum rises with r, so bisection finds
+/// it to round-off). Across a section, the faces' grid lines then lie
+/// exactly `face` in from each face at every elevation, whatever the
+/// thickness there: with `face` the grout stops' inset, the zone minimum
+/// is read on node rows ([`crate::mechanics::grout_stops`]).
+pub(crate) fn graded_fractions(n: usize, t: f64, face: Option<f64>) -> Vec<f64> {
+    let uniform = || (0..=n).map(|j| j as f64 / n as f64).collect();
+    let Some(s) = face else {
+        return uniform();
+    };
+    if n <= 2 || n as f64 * s >= t {
+        return uniform();
+    }
+    let sizes = |r: f64| (0..n).map(move |i| s * r.powi(i.min(n - 1 - i) as i32));
+    let total = |r: f64| sizes(r).sum::<f64>();
+    let (mut lo, mut hi) = (1.0_f64, 2.0_f64);
+    while total(hi) < t {
+        lo = hi;
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if total(mid) < t {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let r = 0.5 * (lo + hi);
+    // Built from both faces towards the middle, so each face's first line
+    // is `face` in to round-off; an odd n's middle cell takes the rest.
+    let mut a = vec![0.0; n + 1];
+    let (mut up, mut down) = (0.0, 0.0);
+    for (i, c) in sizes(r).enumerate().take(n / 2) {
+        up += c;
+        down += c;
+        a[i + 1] = up / t;
+        a[n - 1 - i] = 1.0 - down / t;
+    }
+    a[n] = 1.0;
+    a
+}
+
 /// The concrete layers and lifts a generator chose for its [`BlockRow`].
 pub(crate) struct Layers {
     /// Elevations of the concrete layer boundaries, `layers + 1` of them.
@@ -767,6 +822,16 @@ pub(crate) fn grading_ratio(r: f64) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// `face_element_m` or `joint_element_m` (`key`), where given: finite and > 0.
+pub(crate) fn end_element(key: &str, size: Option<f64>) -> Result<(), MeshError> {
+    match size {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            Err(MeshError::param(key, format!("must be > 0, got {s}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Lifts per zone from the two heights; the error names `zone_height_m`.
 pub(crate) fn zone_lifts(lift_height: f64, zone_height: f64) -> Result<u32, MeshError> {
     if !(lift_height.is_finite() && lift_height > 0.0) {
@@ -797,6 +862,43 @@ pub(crate) fn zone_lifts(lift_height: f64, zone_height: f64) -> Result<u32, Mesh
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn graded_fractions_uniform_without_a_face_element() {
+        let a = graded_fractions(3, 20.0, None);
+        assert_eq!(a, vec![0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0]);
+        // too thin for graded cells, or too few of them: uniform
+        assert_eq!(
+            graded_fractions(4, 3.0, Some(1.0)),
+            graded_fractions(4, 3.0, None)
+        );
+        assert_eq!(
+            graded_fractions(2, 30.0, Some(1.0)),
+            graded_fractions(2, 30.0, None)
+        );
+    }
+
+    #[test]
+    fn graded_fractions_graded_from_both_faces() {
+        for (n, t) in [(8, 35.0), (7, 24.0), (5, 8.0), (10, 24.0)] {
+            let a = graded_fractions(n, t, Some(1.0));
+            assert_eq!(a.len(), n + 1);
+            assert_eq!((a[0], a[n]), (0.0, 1.0));
+            let cells: Vec<f64> = a.windows(2).map(|w| (w[1] - w[0]) * t).collect();
+            assert!((cells[0] - 1.0).abs() < 1e-12, "{n} {t}: {cells:?}");
+            assert!((cells[n - 1] - 1.0).abs() < 1e-12, "{n} {t}: {cells:?}");
+            // one ratio from each face to the middle, symmetric
+            let r = cells[1] / cells[0];
+            assert!(r > 1.0, "{n} {t}: {cells:?}");
+            for i in 0..n {
+                let k = i.min(n - 1 - i) as i32;
+                assert!(
+                    (cells[i] - r.powi(k)).abs() < 1e-9 * t,
+                    "{n} {t}: {cells:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn graded_cells_follow_the_geometric_law() {

@@ -481,6 +481,27 @@ pub struct SolverSettings {
     /// default), `metis_live_set` (nested dissection of each live set) or
     /// `amd`.
     pub ordering: OrderingKind,
+    /// The solid element of the mechanics: `hex8` (trilinear, default) or
+    /// `hex8_incompatible` (with Wilson–Taylor bending modes, condensed per
+    /// element: the same dofs, no shear locking).
+    pub element: SolidElement,
+}
+
+/// The solid element of the mechanics (`solver.element`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolidElement {
+    /// Trilinear hex8, 2×2×2 Gauss points ([`crate::fem::elasticity`]).
+    /// Default. Too stiff in bending: it needs several elements along a
+    /// block to resolve a block that curls as its top cools.
+    #[default]
+    Hex8,
+    /// Hex8 with nine incompatible modes condensed element by element
+    /// ([`crate::fem::hex8_modes`]): bending of rectangular elements exact,
+    /// the patch test passed on any shape; the same global dofs, a 9×9
+    /// condensation per element once, and the modes' amplitudes recovered
+    /// at each step.
+    Hex8Incompatible,
 }
 
 /// Fill-reducing ordering of a sparse factorisation (`solver.ordering`).
@@ -516,6 +537,7 @@ impl Default for SolverSettings {
             contact_max_iterations: 60,
             contact_capacitance: true,
             ordering: OrderingKind::Metis,
+            element: SolidElement::Hex8,
         }
     }
 }

@@ -454,6 +454,8 @@ fn blocks(g: &BlocksGeometry, s: &Scene) -> Check {
     non_negative("geometry.rock_margin_m", g.rock_margin_m)?;
     at_least_one("geometry.rock_margin_elements", g.rock_margin_elements)?;
     grading_ratio(g.rock_grading_ratio)?;
+    end_element("geometry.face_element_m", g.face_element_m)?;
+    end_element("geometry.joint_element_m", g.joint_element_m)?;
     finite("geometry.base_elevation_m", g.base_elevation_m)?;
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
@@ -509,6 +511,8 @@ fn arch(g: &ArchGeometry, s: &Scene) -> Check {
         rock_margin_m: g.rock_margin_m,
         rock_margin_elements: g.rock_margin_elements,
         rock_grading_ratio: g.rock_grading_ratio,
+        face_element_m: g.face_element_m,
+        joint_element_m: g.joint_element_m,
     })?;
     if whole_multiple(g.height_m, s.lifts.height_m).is_none() {
         return Err(SceneError::invalid(
@@ -551,6 +555,8 @@ struct ArchCounts {
     rock_margin_m: f64,
     rock_margin_elements: u32,
     rock_grading_ratio: f64,
+    face_element_m: Option<f64>,
+    joint_element_m: Option<f64>,
 }
 
 fn arch_counts(c: &ArchCounts) -> Check {
@@ -560,7 +566,9 @@ fn arch_counts(c: &ArchCounts) -> Check {
     at_least_one("geometry.rock_layers", c.rock_layers)?;
     non_negative("geometry.rock_margin_m", c.rock_margin_m)?;
     at_least_one("geometry.rock_margin_elements", c.rock_margin_elements)?;
-    grading_ratio(c.rock_grading_ratio)
+    grading_ratio(c.rock_grading_ratio)?;
+    end_element("geometry.face_element_m", c.face_element_m)?;
+    end_element("geometry.joint_element_m", c.joint_element_m)
 }
 
 /// The scalar keys of an `arch_table` geometry (its CSV tables are checked
@@ -624,6 +632,8 @@ fn arch_table(g: &ArchTableGeometry, s: &Scene) -> Check {
         rock_margin_m: g.rock_margin_m,
         rock_margin_elements: g.rock_margin_elements,
         rock_grading_ratio: g.rock_grading_ratio,
+        face_element_m: g.face_element_m,
+        joint_element_m: g.joint_element_m,
     })?;
     rock_needed("geometry.rock_depth_m", g.rock_depth_m, s)
 }
@@ -699,6 +709,16 @@ fn mechanical(s: &Scene) -> Check {
         }
     }
     Ok(())
+}
+
+/// `geometry.face_element_m` or `joint_element_m` (`key`), where given:
+/// > 0 (an end element longer than its share, t / count, leaves the cells
+/// equal).
+fn end_element(key: &str, size: Option<f64>) -> Check {
+    match size {
+        Some(s) => positive(key, s),
+        None => Ok(()),
+    }
 }
 
 /// `geometry.rock_grading_ratio` in [1, 3] (the generators' own limit).

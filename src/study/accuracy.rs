@@ -38,7 +38,7 @@ use crate::mesh::geometry::Geometry;
 use crate::planner::rules::{HistoryIndex, Rules};
 use crate::planner::search::grout_days;
 use crate::planner::{Apertures, Verdict};
-use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, ThermalSolverKind};
+use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, SolidElement, ThermalSolverKind};
 use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Simulation};
 use crate::vocab::{Day, ZoneId};
@@ -128,6 +128,22 @@ pub struct AccuracyTable {
     pub reference_note: String,
     /// settings whose run failed, with the error
     pub failed: Vec<(String, String)>,
+    /// every setting's reading of every judged zone, in ladder order
+    pub zone_values: Vec<ZoneValues>,
+}
+
+/// What one setting read at one zone on its planned date: the rows of
+/// `accuracy_zones.csv`, which say where the settings disagree.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ZoneValues {
+    pub setting: String,
+    pub zone: ZoneId,
+    pub planned: chrono::NaiveDate,
+    /// the deciding aperture [mm]
+    pub deciding_mm: Option<f64>,
+    /// the zone's mean temperature in blocks A and B [°C]
+    pub temps_c: [Option<f64>; 2],
+    pub verdict: Verdict,
 }
 
 /// What one run gives at a zone on its planned date.
@@ -312,6 +328,7 @@ pub fn study(
     let first = run(&reference.setting)?;
     let reference_samples = first.samples.clone();
     let (mut pending, mut outcomes, mut failed) = (Some(first), Vec::new(), Vec::new());
+    let mut zone_values = Vec::new();
     for s in std::iter::once(&reference.setting).chain(&ladder) {
         let mut o = match pending.take() {
             Some(o) => o,
@@ -327,6 +344,18 @@ pub fn study(
             },
         };
         compare(&mut o.row, &o.samples, &reference_samples);
+        for &(day, id) in &zones {
+            if let Some(x) = o.samples.get(&id) {
+                zone_values.push(ZoneValues {
+                    setting: s.name.clone(),
+                    zone: id,
+                    planned: inputs.scene.epoch.date(day),
+                    deciding_mm: x.deciding,
+                    temps_c: x.temps,
+                    verdict: x.verdict,
+                });
+            }
+        }
         progress(&format!(
             "{:<24} {:>6} elements {:>7.1} s  deciding aperture max {:.4} mm, RMS {:.4} mm, temperature {:.3} °C, {} verdicts differ",
             o.row.name, o.row.elements, o.row.seconds, o.row.max_aperture_err_mm, o.row.rms_aperture_err_mm, o.row.max_temp_err_c, o.row.verdicts_differ
@@ -354,6 +383,7 @@ pub fn study(
         failed,
         reference_error_mm: estimate,
         reference_note: note,
+        zone_values,
     })
 }
 
@@ -432,20 +462,34 @@ fn chains_and_estimate(
 
 /// The scene's mesh with `along` × and `across` × the elements, and
 /// `layers` × the element layers per lift (blocks only); false where the
-/// geometry has no such key.
+/// geometry has no such key. A graded mesh keeps its grading: the face
+/// element is divided by `across` too, the joint element by `along`.
 pub fn refine_mesh(scene: &mut Scene, along: f64, across: f64, layers: u32) -> bool {
     let scale = |n: &mut u32, f: f64| *n = ((*n as f64 * f).round() as u32).max(1);
+    let end = |s: &mut Option<f64>, f: f64| *s = s.map(|s| s / f);
     if let Geometry::Blocks(g) = &mut scene.geometry {
         scale(&mut g.elements_per_block, along);
         scale(&mut g.elements_across, across);
+        end(&mut g.face_element_m, across);
+        end(&mut g.joint_element_m, along);
         g.layers_per_lift *= layers;
         true
     } else if let Geometry::Arch(g) = &mut scene.geometry {
         scale(&mut g.elements_per_block, along);
         scale(&mut g.elements_across, across);
+        end(&mut g.face_element_m, across);
+        end(&mut g.joint_element_m, along);
         layers == 1
     } else {
         false
+    }
+}
+
+/// The scene key's value of a solid element.
+fn element_name(e: SolidElement) -> &'static str {
+    match e {
+        SolidElement::Hex8 => "hex8",
+        SolidElement::Hex8Incompatible => "hex8_incompatible",
     }
 }
 
@@ -510,6 +554,16 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         l.push(Setting::new("mechanics 3 d", "mechanics step", None, |s| {
             s.time.mechanics_max_step_days = 3
         }));
+        let other = match scene.solver.element {
+            SolidElement::Hex8 => SolidElement::Hex8Incompatible,
+            SolidElement::Hex8Incompatible => SolidElement::Hex8,
+        };
+        l.push(Setting::new(
+            format!("element {}", element_name(other)),
+            "element",
+            None,
+            move |s| s.solver.element = other,
+        ));
     }
     let mut probe = scene.clone();
     let blocks = refine_mesh(&mut probe, 1.0, 1.0, 2);
@@ -569,6 +623,7 @@ pub fn write(table: &AccuracyTable, out: &Path) -> Result<(), StudyError> {
         ("accuracy.csv", csv(table)),
         ("accuracy.md", markdown(table)),
         ("accuracy.svg", chart(table)),
+        ("accuracy_zones.csv", zones_csv(table)),
     ] {
         let path = out.join(name);
         std::fs::write(&path, text).map_err(io(&path))?;
@@ -599,6 +654,28 @@ pub fn csv(t: &AccuracyTable) -> String {
             r.verdicts_differ,
             r.rate.map_or(String::new(), |p| format!("{p:.3}")),
             r.pareto
+        );
+    }
+    s
+}
+
+/// Every setting's reading of every judged zone, one row each.
+pub fn zones_csv(t: &AccuracyTable) -> String {
+    let mut s =
+        String::from("setting,joint,zone,planned,deciding_aperture_mm,temp_a_c,temp_b_c,verdict\n");
+    let opt = |v: Option<f64>, digits: usize| v.map_or(String::new(), |v| format!("{v:.digits$}"));
+    for z in &t.zone_values {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{}",
+            z.setting,
+            z.zone.joint,
+            z.zone.zone,
+            z.planned,
+            opt(z.deciding_mm, 4),
+            opt(z.temps_c[0], 3),
+            opt(z.temps_c[1], 3),
+            z.verdict.as_str()
         );
     }
     s
@@ -721,24 +798,55 @@ pub fn chart(t: &AccuracyTable) -> String {
     s.finish(&format!("{}: accuracy against time", t.scene), &style)
 }
 
-/// The default ladder of the scene at `scene_path` (or, with
-/// `presets_only`, the scene as given and the presets against a time-only
-/// reference, [`time_reference`]: for scenes too large for the mesh
-/// knobs), written into `out`; `progress` gets a line per finished setting.
+/// Which part of the default ladder [`accuracy`] runs.
+#[derive(Debug, Clone, Default)]
+pub struct AccuracyOptions {
+    /// Judge only the zones planned within this many days of the epoch
+    /// (the runs end there). Default: every zone.
+    pub horizon_days: Option<i64>,
+    /// The scene as given and the presets against a time-only reference
+    /// ([`time_reference`]): for scenes too large for the mesh knobs.
+    /// Default: false.
+    pub presets_only: bool,
+    /// Only the scene as given and these knobs' settings (the names of
+    /// [`Setting::knob`]); empty (default): every knob.
+    pub knobs: Vec<String>,
+}
+
+/// The default ladder of the scene at `scene_path`, cut down by `options`,
+/// written into `out`; `progress` gets a line per finished setting. An
+/// unknown knob name is an error listing the ladder's knobs.
 pub fn accuracy(
     scene_path: &Path,
     out: &Path,
-    horizon_days: Option<i64>,
-    presets_only: bool,
+    options: &AccuracyOptions,
     progress: &mut dyn FnMut(&str),
 ) -> Result<AccuracyTable, StudyError> {
     let scene = Scene::load(scene_path)?;
     let (mut ladder, mut reference) = default_ladder(&scene);
-    if presets_only {
+    if options.presets_only {
         ladder.retain(|s| s.knob == SCENE || s.knob == "preset");
         reference = time_reference();
     }
-    let table = study(scene_path, ladder, reference, horizon_days, progress)?;
+    if !options.knobs.is_empty() {
+        let known: Vec<&str> = ladder.iter().map(|s| s.knob.as_str()).collect();
+        if let Some(k) = options.knobs.iter().find(|k| !known.contains(&k.as_str())) {
+            let mut known = known;
+            known.dedup();
+            return Err(StudyError::Knob(format!(
+                "unknown knob `{k}` for this scene; its ladder has: {}",
+                known.join(", ")
+            )));
+        }
+        ladder.retain(|s| s.knob == SCENE || options.knobs.contains(&s.knob));
+    }
+    let table = study(
+        scene_path,
+        ladder,
+        reference,
+        options.horizon_days,
+        progress,
+    )?;
     write(&table, out)?;
     Ok(table)
 }

@@ -61,6 +61,9 @@ pub enum StudyError {
     },
     #[error("--solver: expected cholesky, pcg or both, found {0:?}")]
     Solver(String),
+    /// `study accuracy --knobs` naming a knob the scene's ladder lacks.
+    #[error("--knobs: {0}")]
+    Knob(String),
     /// `schedule synth` onto a folder that already holds schedules.
     #[error("{path}: already holds {files}; schedule synth would overwrite them (give --out another folder, or add --force to overwrite)")]
     WouldOverwrite { path: String, files: String },

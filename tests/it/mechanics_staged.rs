@@ -222,3 +222,86 @@ fn mechanics_settings_name_a_missing_value() {
         "concrete.poisson is missing: the mechanical effects need it"
     );
 }
+
+/// The stresses and the largest displacement error of a free column (one
+/// block, 2 × 2 elements, 4 lifts of 3 m) heated by g·y across its
+/// thickness, on the element `element`: supported by rollers on its base
+/// and on its x = 0 face and at one base node along y (a support set that
+/// lets it curl freely).
+fn curled_column(element: &str) -> (f64, f64, f64) {
+    let sc = mech_scene(
+        "\"thermal_strain\"",
+        &blocks_geometry(1, 4.0, 2.0, 4, 2, 2),
+        &format!("[solver]\nelement = \"{element}\"\n"),
+    );
+    let mesh = blocks_mesh(&sc);
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
+    let mut fixed = vec![];
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        if p[2].abs() < 1e-9 {
+            fixed.push((i as u32, 2u8));
+        }
+        if p[0].abs() < 1e-9 {
+            fixed.push((i as u32, 0u8));
+        }
+        if p.iter().all(|v| v.abs() < 1e-9) {
+            fixed.push((i as u32, 1u8));
+        }
+    }
+    let supports = groutready::mechanics::Supports { fixed };
+    let mut m = MechanicsModel::new(&mesh, &mechanics, &supports).unwrap();
+    for lift in 1..=4 {
+        m.pour(1, lift, 0.0);
+    }
+    let g = 5.0; // °C per m across the thickness
+    let before = vec![20.0; mesh.n_thermal_dofs];
+    let mut after = before.clone();
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        after[mesh.thermal_dof[i] as usize] = 20.0 + g * p[1];
+    }
+    m.step(0.0, 1.0, Some((&before, &after)), None).unwrap();
+    let ag = 1.0e-5 * g;
+    let mut u_err: f64 = 0.0;
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        let [x, y, z] = *p;
+        let exact = [ag * x * y, 0.5 * ag * (y * y - x * x - z * z), ag * y * z];
+        for d in 0..3 {
+            u_err = u_err.max((m.state.u[3 * i + d] - exact[d]).abs());
+        }
+    }
+    let sigma = m
+        .state
+        .stress
+        .iter()
+        .flatten()
+        .flatten()
+        .fold(0.0f64, |a, s| a.max(s.abs()));
+    // nothing loads the column: the residual's own scale is round-off
+    // (`equilibrium_residual_parts`), so it is taken in newtons
+    (sigma, u_err, m.equilibrium_residual_parts().0)
+}
+
+/// A linear temperature across a free column curls it without stress:
+/// u = αg(xy, (y² − x² − z²)/2, yz). The field is quadratic: the plain
+/// hex8 cannot follow it and stresses itself (MPa), the incompatible modes
+/// follow it exactly — which also checks that their amplitudes are
+/// recovered right when the step's strains are committed.
+#[test]
+fn a_linear_temperature_curls_a_free_column_without_stress_on_incompatible_hex8() {
+    let (sigma, u_err, residual) = curled_column("hex8_incompatible");
+    let (plain_sigma, plain_err, _) = curled_column("hex8");
+    // the tip moves αg·z²/2 = 3.6 mm; the stress scale is E·α·g·t ~ 3 MPa
+    eprintln!(
+        "curled column: incompatible |σ| ≤ {sigma:.2e} Pa, |u − exact| ≤ {u_err:.2e} m, \
+         equilibrium residual {residual:.1e} N; plain hex8 |σ| ≤ {plain_sigma:.2e} Pa, {plain_err:.2e} m"
+    );
+    assert!(sigma < 1e-3, "stress {sigma} Pa");
+    assert!(u_err < 1e-12, "displacement off by {u_err} m");
+    // against forces of E·α·g·t² ≈ 6 MN per metre of column
+    assert!(residual < 1e-3, "equilibrium residual {residual} N");
+    assert!(
+        plain_sigma > 1e5,
+        "the plain hex8 should stress itself: {plain_sigma} Pa"
+    );
+    assert!(plain_err > 1e-5, "{plain_err}");
+}

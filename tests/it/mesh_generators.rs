@@ -24,6 +24,8 @@ fn blocks_geom(n_blocks: u32) -> BlocksGeometry {
         rock_margin_m: 0.0,
         rock_margin_elements: 1,
         rock_grading_ratio: 1.0,
+        face_element_m: None,
+        joint_element_m: None,
         base_elevation_m: 100.0,
     }
 }
@@ -50,6 +52,8 @@ fn demo_arch() -> ArchGeometry {
         rock_margin_m: 60.0,
         rock_margin_elements: 1,
         rock_grading_ratio: 1.0,
+        face_element_m: None,
+        joint_element_m: None,
     }
 }
 
@@ -75,6 +79,8 @@ fn large_arch() -> ArchGeometry {
         rock_margin_m: 150.0,
         rock_margin_elements: 1,
         rock_grading_ratio: 1.0,
+        face_element_m: None,
+        joint_element_m: None,
     }
 }
 
@@ -403,6 +409,8 @@ fn blocks_volume_layers_and_zones() {
         rock_margin_m: 20.0,
         rock_margin_elements: 2,
         rock_grading_ratio: 1.0,
+        face_element_m: None,
+        joint_element_m: None,
         base_elevation_m: 0.0,
     };
     let m = generate_blocks(&g, 1.5, 4.5).unwrap();
@@ -472,6 +480,91 @@ fn demo_arch_is_valid() {
     assert!((-6.0..=-5.99).contains(&y_min), "crown overhang {y_min}");
     check_all(&m, 3);
     check_arch_zone_points_on_radial_planes(&m, &p);
+}
+
+/// `face_element_m`: at every elevation of every joint, whatever the
+/// section's thickness there, the grid line next to each face lies exactly
+/// that far in, and the cells grow towards the middle; the mesh stays valid.
+#[test]
+fn graded_across_puts_a_node_row_at_the_face_element() {
+    let mut p = demo_arch();
+    p.elements_across = 8;
+    p.face_element_m = Some(1.0);
+    let m = generate_arch(&p, 3.0, 9.0).unwrap();
+    assert!(min_corner_jacobian(&m) > 0.0);
+    check_all(&m, 8);
+    let dist = |a: u32, b: u32| {
+        let (x, y) = (m.nodes[a as usize], m.nodes[b as usize]);
+        ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+    };
+    let mut rows = 0;
+    for z in &m.zones {
+        let mut by_layer: HashMap<u32, Vec<&groutready::mesh::FacePair>> = HashMap::new();
+        for &i in &z.pairs {
+            let fp = &m.face_pairs[i as usize];
+            by_layer.entry(fp.layer).or_default().push(fp);
+        }
+        for row in by_layer.values() {
+            assert_eq!(row.len(), 8);
+            // across widths of the row's quads, bottom edge (nodes 0 → 1)
+            let w: Vec<f64> = row
+                .iter()
+                .map(|fp| dist(fp.nodes_a[0], fp.nodes_a[1]))
+                .collect();
+            let thickness: f64 = w.iter().sum();
+            assert!(
+                (w[0] - 1.0).abs() < 1e-9 && (w[7] - 1.0).abs() < 1e-9,
+                "{w:?}"
+            );
+            if thickness > 8.0 + 1e-6 {
+                assert!(w[1] > w[0] && w[3] > w[2] && w[6] > w[7], "{w:?}");
+            }
+            rows += 1;
+        }
+    }
+    assert!(rows > 100);
+    // the same grid without the key is the uniform one, node for node
+    p.face_element_m = None;
+    let uniform = generate_arch(&p, 3.0, 9.0).unwrap();
+    assert_eq!(uniform.nodes.len(), m.nodes.len());
+    assert_ne!(uniform.nodes, m.nodes);
+}
+
+/// `joint_element_m`: next to every joint (and abutment end) of every
+/// block the element along is that wide, growing towards the block's
+/// middle; with both gradings an arch stays valid.
+#[test]
+fn graded_along_puts_a_node_row_at_the_joint_element() {
+    let mut p = blocks_geom(3);
+    p.elements_per_block = 6;
+    p.joint_element_m = Some(1.0);
+    let m = generate_blocks(&p, 5.0, 5.0).unwrap();
+    assert!(min_corner_jacobian(&m) > 0.0);
+    let mut xs: Vec<f64> = m.nodes.iter().map(|n| n[0]).collect();
+    xs.sort_by(f64::total_cmp);
+    xs.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    assert_eq!(xs.len(), 3 * 6 + 1);
+    for b in 0..3 {
+        let w: Vec<f64> = (0..6).map(|e| xs[6 * b + e + 1] - xs[6 * b + e]).collect();
+        assert!(
+            (w[0] - 1.0).abs() < 1e-9 && (w[5] - 1.0).abs() < 1e-9,
+            "{w:?}"
+        );
+        assert!(
+            w[1] > w[0] && w[2] > w[1] && (w[2] - w[3]).abs() < 1e-9,
+            "{w:?}"
+        );
+        assert!((xs[6 * b + 6] - 20.0 * (b + 1) as f64).abs() < 1e-9);
+    }
+    let mut a = demo_arch();
+    a.elements_per_block = 4;
+    a.elements_across = 6;
+    a.joint_element_m = Some(2.0);
+    a.face_element_m = Some(1.0);
+    let m = generate_arch(&a, 3.0, 9.0).unwrap();
+    assert!(min_corner_jacobian(&m) > 0.0);
+    check_all(&m, 6);
+    check_arch_zone_points_on_radial_planes(&m, &a);
 }
 
 /// Zone points lie on the radial joint plane φ_j through the centre of

@@ -364,6 +364,8 @@ fn block(n_blocks: u32, elements_across: u32, n_lifts: u32, lift: f64) -> Mesh {
         rock_margin_m: 0.0,
         rock_margin_elements: 1,
         rock_grading_ratio: 1.0,
+        face_element_m: None,
+        joint_element_m: None,
         base_elevation_m: 0.0,
     };
     generate_blocks(&g, lift, 3.0 * lift).unwrap()

@@ -68,6 +68,39 @@ fn tiny_ladder_against_its_reference() {
     }
     let csv = std::fs::read_to_string(out.path().join("accuracy.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + table.rows.len());
+    // Per zone: every setting's reading of the 4 zones; the reference's
+    // copy reads what the reference reads, the coarser setting does not.
+    let zones = std::fs::read_to_string(out.path().join("accuracy_zones.csv")).unwrap();
+    assert_eq!(zones.lines().count(), 1 + 4 * table.rows.len());
+    let readings = |name: &str| -> Vec<String> {
+        zones
+            .lines()
+            .filter(|l| l.starts_with(&format!("{name},")))
+            .map(|l| l[name.len()..].to_string())
+            .collect()
+    };
+    assert_eq!(readings("reference"), readings("copy of the reference"));
+    assert_ne!(readings("reference"), readings("steps x2"));
+}
+
+/// `--knobs` cuts the ladder to the named knobs; a name the ladder lacks
+/// is an error listing the ladder's knobs (before anything is simulated).
+#[test]
+fn unknown_knob_lists_the_ladders_knobs() {
+    let scene = repo("models/small_dam_joints.toml");
+    let out = tempfile::tempdir().unwrap();
+    let options = accuracy::AccuracyOptions {
+        knobs: vec!["across".into(), "acros".into()],
+        ..Default::default()
+    };
+    let e = accuracy::accuracy(&scene, out.path(), &options, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown knob `acros`"), "{e}");
+    for k in ["steps", "capacity", "across", "along", "preset"] {
+        assert!(e.contains(k), "{e}");
+    }
+    assert!(std::fs::read_dir(out.path()).unwrap().next().is_none());
 }
 
 /// The small dam's text with its `[time]` keys `drop` removed and `solver`
