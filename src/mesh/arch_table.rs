@@ -474,10 +474,11 @@ fn grid_angles(
     for (b, w) in bounds.windows(2).enumerate() {
         let first = if b == 0 { 0 } else { 1 };
         let a = grid::graded_fractions(epb, w[1] - w[0], g.joint_element_m);
-        for e in first..=epb {
+        for (e, f) in a.iter().enumerate().skip(first) {
+            // uniform: the expression of the first version, bit for bit
             let s = match g.joint_element_m {
                 None => w[0] + (w[1] - w[0]) * e as f64 / epb as f64,
-                Some(_) => w[0] + (w[1] - w[0]) * a[e],
+                Some(_) => w[0] + (w[1] - w[0]) * f,
             };
             along.push(crest_angle(crest, s - s_crown)?);
         }

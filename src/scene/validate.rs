@@ -712,8 +712,8 @@ fn mechanical(s: &Scene) -> Check {
 }
 
 /// `geometry.face_element_m` or `joint_element_m` (`key`), where given:
-/// > 0 (an end element longer than its share, t / count, leaves the cells
-/// equal).
+/// positive (an end element longer than its share, t / count, leaves the
+/// cells equal).
 fn end_element(key: &str, size: Option<f64>) -> Check {
     match size {
         Some(s) => positive(key, s),
