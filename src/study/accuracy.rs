@@ -33,6 +33,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use serde::{Deserialize, Serialize};
+
 use crate::app;
 use crate::mesh::geometry::Geometry;
 use crate::planner::rules::{HistoryIndex, Rules};
@@ -41,7 +43,7 @@ use crate::planner::{Apertures, Verdict};
 use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, SolidElement, ThermalSolverKind};
 use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Simulation};
-use crate::vocab::{Day, ZoneId};
+use crate::vocab::{fnv1a, Day, ZoneId};
 
 use super::StudyError;
 
@@ -91,7 +93,7 @@ pub struct Reference {
 }
 
 /// One row of the accuracy table.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     pub name: String,
     pub knob: String,
@@ -147,7 +149,7 @@ pub struct ZoneValues {
 }
 
 /// What one run gives at a zone on its planned date.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct Sample {
     apertures: Apertures,
     deciding: Option<f64>,
@@ -312,20 +314,116 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
         .collect()
 }
 
+/// What identifies a reference run: the program, the scene as the
+/// reference edits it, the schedule files' bytes and the judged zones.
+fn reference_key(
+    inputs: &app::Inputs,
+    reference: &Setting,
+    zones: &[(Day, ZoneId)],
+) -> Result<u64, StudyError> {
+    let mut scene = inputs.scene.clone();
+    (reference.edit)(&mut scene);
+    let mut text = format!(
+        "groutready {} accuracy reference 1\n{}\n{zones:?}\n",
+        env!("CARGO_PKG_VERSION"),
+        serde_json::to_string(&scene).unwrap_or_default()
+    );
+    let dir = &inputs.schedules_dir;
+    let io = |source| StudyError::Io {
+        action: "reading",
+        path: dir.display().to_string(),
+        source,
+    };
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .collect();
+    files.sort();
+    for f in files {
+        let bytes = std::fs::read(&f).map_err(io)?;
+        let _ = writeln!(text, "{} {:016x}", f.display(), fnv1a(&bytes));
+    }
+    Ok(fnv1a(text.as_bytes()))
+}
+
+/// A reference run kept for the next study ([`study`]'s `cache`).
+#[derive(Serialize, Deserialize)]
+struct CachedReference {
+    key: u64,
+    row: Row,
+    samples: Vec<(ZoneId, Sample)>,
+}
+
+/// The reference kept in `path` under `key`; None when there is none, it
+/// is unreadable or it was kept for another key.
+fn cached_reference(path: &Path, key: u64) -> Option<Outcome> {
+    let c: CachedReference = postcard::from_bytes(&std::fs::read(path).ok()?).ok()?;
+    (c.key == key).then(|| Outcome {
+        row: c.row,
+        samples: c.samples.into_iter().collect(),
+    })
+}
+
+/// Keeps the reference run in `path` (written whole, then renamed).
+fn save_reference(path: &Path, key: u64, o: &Outcome) -> Result<(), StudyError> {
+    let mut samples: Vec<(ZoneId, Sample)> = o.samples.clone().into_iter().collect();
+    samples.sort_by_key(|s| s.0);
+    let bytes = postcard::to_allocvec(&CachedReference {
+        key,
+        row: o.row.clone(),
+        samples,
+    })
+    .unwrap_or_default();
+    let io = |source| StudyError::Io {
+        action: "writing",
+        path: path.display().to_string(),
+        source,
+    };
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(io)
+}
+
 /// Runs the ladder and the reference; `horizon_days` judges only the zones
 /// planned within that many days of the epoch (and ends the runs there).
+/// With `cache`, a reference run kept there for the same scene, schedules,
+/// zones and program is read instead of run, and a reference that is run
+/// is kept there: the reference is the ladder's dearest run, and the same
+/// study is often run again with other knobs (`--knobs`).
 /// `progress` gets a line per finished setting.
 pub fn study(
     scene_path: &Path,
     ladder: Vec<Setting>,
     reference: Reference,
     horizon_days: Option<i64>,
+    cache: Option<&Path>,
     progress: &mut dyn FnMut(&str),
 ) -> Result<AccuracyTable, StudyError> {
     let inputs = app::load_inputs(scene_path, None)?;
     let zones = judged_zones(&inputs.scene, &inputs.schedules, horizon_days);
     let run = |s: &Setting| run_setting(&inputs.scene, &inputs.schedules, &zones, s);
-    let first = run(&reference.setting)?;
+    let key = reference_key(&inputs, &reference.setting, &zones)?;
+    let first = match cache.and_then(|c| cached_reference(c, key)) {
+        Some(o) => {
+            progress(&format!(
+                "{:<24} read from {} (the same scene, schedules, zones and program)",
+                o.row.name,
+                cache.map_or(String::new(), |c| c.display().to_string())
+            ));
+            o
+        }
+        None => {
+            let o = run(&reference.setting)?;
+            if let Some(c) = cache {
+                save_reference(c, key, &o)?;
+            }
+            o
+        }
+    };
     let reference_samples = first.samples.clone();
     let (mut pending, mut outcomes, mut failed) = (Some(first), Vec::new(), Vec::new());
     let mut zone_values = Vec::new();
@@ -840,11 +938,13 @@ pub fn accuracy(
         }
         ladder.retain(|s| s.knob == SCENE || options.knobs.contains(&s.knob));
     }
+    let cache = out.join("reference.bin");
     let table = study(
         scene_path,
         ladder,
         reference,
         options.horizon_days,
+        Some(&cache),
         progress,
     )?;
     write(&table, out)?;

@@ -33,7 +33,17 @@ fn tiny_ladder_against_its_reference() {
         levels: vec![("steps".into(), 0.5)],
     };
     let scene = repo("models/small_dam_joints.toml");
-    let table = accuracy::study(&scene, ladder, reference, Some(150), &mut |_| {}).unwrap();
+    let cache = tempfile::tempdir().unwrap();
+    let kept = cache.path().join("reference.bin");
+    let table = accuracy::study(
+        &scene,
+        ladder,
+        reference,
+        Some(150),
+        Some(&kept),
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(table.zones, 4);
     let row = |name: &str| table.rows.iter().find(|r| r.name == name).unwrap();
     for name in ["reference", "copy of the reference"] {
@@ -81,6 +91,39 @@ fn tiny_ladder_against_its_reference() {
     };
     assert_eq!(readings("reference"), readings("copy of the reference"));
     assert_ne!(readings("reference"), readings("steps x2"));
+
+    // The reference was kept: the same study again reads it (its row to
+    // the bit, wall time included) instead of running it; another
+    // reference edit runs.
+    let again = |edit: fn(&mut Scene)| {
+        let mut lines = vec![];
+        let t = accuracy::study(
+            &scene,
+            vec![Setting::new("scene as given", SCENE, Some(1.0), |_| {})],
+            Reference {
+                setting: Setting::new("reference", REFERENCE, None, edit),
+                levels: vec![("steps".into(), 0.5)],
+            },
+            Some(150),
+            Some(&kept),
+            &mut |l| lines.push(l.to_string()),
+        )
+        .unwrap();
+        (t, lines.join("\n"))
+    };
+    let (t2, said) = again(half_steps);
+    assert!(said.contains("read from"), "{said}");
+    assert_eq!(t2.rows[0], *row("reference"));
+    let (a, b) = (&t2.rows[1], row("scene as given"));
+    assert_eq!(
+        (a.max_aperture_err_mm, a.max_temp_err_c, a.verdicts_differ),
+        (b.max_aperture_err_mm, b.max_temp_err_c, b.verdicts_differ)
+    );
+    let (_, said) = again(|s| {
+        s.time.first_step_days *= 0.25;
+        s.time.max_step_days *= 0.25;
+    });
+    assert!(!said.contains("read from"), "{said}");
 }
 
 /// `--knobs` cuts the ladder to the named knobs; a name the ladder lacks
