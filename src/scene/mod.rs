@@ -483,7 +483,10 @@ pub struct SolverSettings {
     pub ordering: OrderingKind,
     /// The solid element of the mechanics: `hex8` (trilinear, default) or
     /// `hex8_incompatible` (with Wilson–Taylor bending modes, condensed per
-    /// element: the same dofs, no shear locking).
+    /// element: the same dofs, no shear locking). Not written when it is
+    /// the default, so the restart fingerprints of scenes from before the
+    /// key stay what they were.
+    #[serde(skip_serializing_if = "SolidElement::is_default")]
     pub element: SolidElement,
 }
 
@@ -502,6 +505,12 @@ pub enum SolidElement {
     /// condensation per element once, and the modes' amplitudes recovered
     /// at each step.
     Hex8Incompatible,
+}
+
+impl SolidElement {
+    fn is_default(&self) -> bool {
+        *self == SolidElement::default()
+    }
 }
 
 /// Fill-reducing ordering of a sparse factorisation (`solver.ordering`).
