@@ -113,7 +113,12 @@ fn tiny_ladder_against_its_reference() {
     };
     let (t2, said) = again(half_steps);
     assert!(said.contains("read from"), "{said}");
-    assert_eq!(t2.rows[0], *row("reference"));
+    // (its place on the front depends on the ladder it is in)
+    let kept_row = accuracy::Row {
+        pareto: row("reference").pareto,
+        ..t2.rows[0].clone()
+    };
+    assert_eq!(kept_row, *row("reference"));
     let (a, b) = (&t2.rows[1], row("scene as given"));
     assert_eq!(
         (a.max_aperture_err_mm, a.max_temp_err_c, a.verdicts_differ),
