@@ -3,6 +3,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
+use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
@@ -345,6 +346,11 @@ struct StepAssembly {
     coeffs: Vec<StepCoefficients>,
     /// strain increments imposed at constant stress, per slot and Gauss point
     pseudo: Vec<[[f64; 6]; 8]>,
+    /// with the incompatible modes, the modes' share f̂_α of those strains'
+    /// load at E = 1, per slot (zero where nothing is imposed; empty with
+    /// the plain hex8): the load's condensation and the amplitudes' recovery
+    /// at the commit both need it
+    mode_loads: Vec<SVector<f64, 9>>,
 }
 
 impl MechanicsModel {
@@ -638,6 +644,7 @@ impl MechanicsModel {
             mut b,
             coeffs,
             pseudo,
+            mode_loads,
         } = self.assemble(t0, t1, temps)?;
         let (df_ext, water) = self.external_loads(water_level)?;
         let ext = self.sys.reduce(&df_ext, &self.points);
@@ -653,7 +660,7 @@ impl MechanicsModel {
             self.solve_joints(&a, &b, &prescribed, t1)?
         };
 
-        self.commit(&x, &coeffs, &pseudo, &df_ext, water);
+        self.commit(&x, &coeffs, &pseudo, &mode_loads, &df_ext, water);
         self.stats.steps += 1;
         Ok(())
     }
@@ -671,6 +678,7 @@ impl MechanicsModel {
         let mut b = vec![0.0; sys.n];
         let mut coeffs = Vec::with_capacity(sys.elements.len());
         let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
+        let mut mode_loads = Vec::new();
         for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
             let c = self.coefficients(e, t0, t1)?;
@@ -679,14 +687,25 @@ impl MechanicsModel {
                 None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
             }
             let eps = self.imposed_strain(e, &c, temps);
-            if eps.iter().any(|g| g.iter().any(|&v| v != 0.0)) {
+            let imposed = eps.iter().any(|g| g.iter().any(|&v| v != 0.0));
+            let modes = self.tables.modes.get(e);
+            let f_alpha = match modes {
+                Some(m) if imposed => {
+                    let q = elasticity::poisson_matrix(self.tables.nu[e]);
+                    m.mode_load(&self.tables.gauss[e], &q, &eps)
+                }
+                _ => SVector::zeros(),
+            };
+            if imposed {
                 let d = elasticity::isotropic_d(c.e_eff, self.tables.nu[e]);
                 let mut load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
-                if let Some(m) = self.tables.modes.get(e) {
-                    let f_alpha = m.mode_load(&self.tables.gauss[e], &d, &eps);
-                    load = m.condense_load(&load, &f_alpha);
+                if let Some(m) = modes {
+                    load = m.condense_load(&load, &(f_alpha * c.e_eff));
                 }
                 sys.add_element_vector(slot, &load, &self.points, &mut b);
+            }
+            if modes.is_some() {
+                mode_loads.push(f_alpha);
             }
             coeffs.push(c);
             pseudo.push(eps);
@@ -696,6 +715,7 @@ impl MechanicsModel {
             b,
             coeffs,
             pseudo,
+            mode_loads,
         })
     }
 
@@ -825,6 +845,7 @@ impl MechanicsModel {
         x: &[f64],
         coeffs: &[StepCoefficients],
         pseudo: &[[[f64; 6]; 8]],
+        mode_loads: &[SVector<f64, 9>],
         df_ext: &[f64],
         water: Vec<f64>,
     ) {
@@ -841,11 +862,11 @@ impl MechanicsModel {
             let c = &coeffs[slot];
             let nu = Poisson(self.tables.nu[e]);
             // the incompatible modes' amplitudes (E cancels: loads at E = 1)
-            let modes = self.tables.modes.get(e).map(|m| {
-                let q = elasticity::poisson_matrix(nu.0);
-                let f_alpha = m.mode_load(&self.tables.gauss[e], &q, &pseudo[slot]);
-                (m, m.amplitudes(&ue, &f_alpha))
-            });
+            let modes = self
+                .tables
+                .modes
+                .get(e)
+                .map(|m| (m, m.amplitudes(&ue, &mode_loads[slot])));
             for (g, (gauss, imposed)) in self.tables.gauss[e].iter().zip(&pseudo[slot]).enumerate()
             {
                 let mut deps = elasticity::strain(gauss, &ue);
