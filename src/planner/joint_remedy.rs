@@ -31,7 +31,11 @@
 //! of S along the step taken ([`Linear::secant`]) and the program is solved
 //! again, at most [`ROUNDS`] times. The cheapest point a re-simulation
 //! verified (k* itself when none is cheaper) is the answer, so the
-//! result never costs more than the zone-by-zone search. The site limits:
+//! result never costs more than the zone-by-zone search when k* holds.
+//! k* need not hold: each zone's steps were found with its neighbours at
+//! the search's trial values, not at their final ones. Then the answer is
+//! the cheapest verified point, which may cost more, and says so
+//! (`Together::zone_by_zone_held`). The site limits:
 //! the largest supercooling bounds k, the coldest water is kept by the
 //! edit, and the others are read on the plan's verification run as for any
 //! remedy (`search::verify_together`).
@@ -304,6 +308,10 @@ pub(super) struct Together {
     pub ks: BTreeMap<ZoneId, u32>,
     pub apertures: BTreeMap<ZoneId, f64>,
     pub zone_by_zone: BTreeMap<ZoneId, u32>,
+    /// whether the zone-by-zone steps passed when run together (the
+    /// search found each zone's steps with its neighbours at other trial
+    /// values, so they need not)
+    pub zone_by_zone_held: bool,
     /// the zones whose steps the program was free to change, in sets of
     /// neighbours
     pub sets: Vec<Vec<ZoneId>>,
@@ -495,6 +503,7 @@ pub(super) fn optimise(
         ks: ids.iter().copied().zip(best.k.iter().copied()).collect(),
         apertures: ids.iter().copied().zip(best.apertures.clone()).collect(),
         zone_by_zone: ids.iter().copied().zip(zbz.iter().copied()).collect(),
+        zone_by_zone_held: seen[0].passed,
         sets: sets(&ids, &free),
     }))
 }

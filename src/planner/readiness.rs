@@ -158,7 +158,9 @@ pub struct SupercoolOption {
     /// aperture at the deciding point on the planned date with it [mm]
     pub aperture_mm: f64,
     /// set when the supercooling was chosen together with neighbouring
-    /// zones, at less cost than zone by zone (`planner::joint_remedy`)
+    /// zones (`planner::joint_remedy`): at less cost than zone by zone, or,
+    /// when the zone-by-zone steps failed applied together, the least set
+    /// a re-simulation verified
     #[serde(default)]
     pub together: Option<ChosenTogether>,
 }
@@ -174,6 +176,17 @@ pub struct ChosenTogether {
     /// zone by zone [°C]
     pub set_c: f64,
     pub set_zone_by_zone_c: f64,
+    /// whether the zone-by-zone steps, applied together, made every zone
+    /// of the search groutable; when not, `set_c` may exceed
+    /// `set_zone_by_zone_c` (it is what holding them together costs)
+    #[serde(default = "held")]
+    pub zone_by_zone_held: bool,
+}
+
+/// A file written before `zone_by_zone_held` existed only held sets that
+/// cost less than zone by zone.
+fn held() -> bool {
+    true
 }
 
 /// Delay of the zone's grouting.

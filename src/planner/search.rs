@@ -320,14 +320,25 @@ fn propose(
         RemedyChoice::Supercool if together.is_some() => {
             let t = together.expect("some");
             let with: Vec<String> = t.with.iter().map(ZoneId::to_string).collect();
-            format!(
-                "supercooled together with {}: {:.2} °C in all against {:.2} °C zone by zone \
-                 ({:.2} °C for this zone alone)",
-                with.join(", "),
-                t.set_c,
-                t.set_zone_by_zone_c,
-                t.zone_by_zone_c
-            )
+            if t.zone_by_zone_held {
+                format!(
+                    "supercooled together with {}: {:.2} °C in all against {:.2} °C zone by zone \
+                     ({:.2} °C for this zone alone)",
+                    with.join(", "),
+                    t.set_c,
+                    t.set_zone_by_zone_c,
+                    t.zone_by_zone_c
+                )
+            } else {
+                format!(
+                    "supercooled together with {}: {:.2} °C in all, verified; the zone-by-zone \
+                     steps ({:.2} °C in all, {:.2} °C for this zone) failed applied together",
+                    with.join(", "),
+                    t.set_c,
+                    t.set_zone_by_zone_c,
+                    t.zone_by_zone_c
+                )
+            }
         }
         RemedyChoice::Supercool => match cost_dl {
             Some(c) => format!(
@@ -765,6 +776,7 @@ fn chosen_together(t: &joint_remedy::Together, step: f64, out: &mut Found<Superc
                             zone_by_zone_c: t.zone_by_zone[z] as f64 * step,
                             set_c,
                             set_zone_by_zone_c,
+                            zone_by_zone_held: t.zone_by_zone_held,
                         }),
                     }),
                     String::new(),
@@ -1006,4 +1018,44 @@ fn delay_search(
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A set chosen together is described by what it saved, or, when the
+    /// zone-by-zone steps failed applied together, as what holding them
+    /// together costs: never as a saving it is not.
+    #[test]
+    fn a_set_dearer_than_zone_by_zone_is_not_called_a_saving() {
+        let key = ZoneId::new(6, 4);
+        let option = |set_c: f64, held: bool| SupercoolOption {
+            delta_c: 3.0,
+            aperture_mm: 1.9,
+            together: Some(ChosenTogether {
+                with: vec![ZoneId::new(7, 4)],
+                zone_by_zone_c: 2.75,
+                set_c,
+                set_zone_by_zone_c: 3.25,
+                zone_by_zone_held: held,
+            }),
+        };
+        let s = PlannerSettings::default();
+        let note = |o: SupercoolOption| {
+            let found: Found<SupercoolOption> = [(key, (Some(o), String::new()))].into();
+            propose(key, &found, &Found::new(), &s).note
+        };
+        let saved = note(option(2.5, true));
+        assert!(
+            saved.contains("2.50 °C in all against 3.25 °C zone by zone"),
+            "{saved}"
+        );
+        let dearer = note(option(4.5, false));
+        assert!(!dearer.contains("against"), "{dearer}");
+        assert!(
+            dearer.contains("4.50 °C in all, verified; the zone-by-zone steps (3.25 °C in all, 2.75 °C for this zone) failed applied together"),
+            "{dearer}"
+        );
+    }
 }

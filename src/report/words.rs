@@ -255,6 +255,7 @@ mod tests {
                 zone_by_zone_c: 0.25,
                 set_c: 0.5,
                 set_zone_by_zone_c: 0.75,
+                zone_by_zone_held: true,
             });
             r
         };

@@ -113,6 +113,11 @@ pub struct Row {
     /// either block's zone temperature [°C]
     pub max_temp_err_c: f64,
     pub verdicts_differ: usize,
+    /// of those, the zones the reference decides: a zone is not counted
+    /// when the two deciding apertures lie either side of an aperture limit
+    /// (`min_aperture_mm`, `marginal_aperture_mm`) and the reference's lies
+    /// within its own estimated error of it ([`verdicts_beyond_band`])
+    pub verdicts_beyond_band: usize,
     /// fitted rate of this row's knob chain
     pub rate: Option<f64>,
     pub pareto: bool,
@@ -231,6 +236,7 @@ fn run_setting(
         max_point_err_mm: 0.0,
         max_temp_err_c: 0.0,
         verdicts_differ: 0,
+        verdicts_beyond_band: 0,
         rate: None,
         pareto: false,
     };
@@ -274,6 +280,36 @@ fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneI
     row.max_point_err_mm = points;
     row.max_temp_err_c = temps;
     row.verdicts_differ = differ;
+}
+
+/// The zones whose verdict in `a` differs from the reference's, leaving
+/// out those the reference cannot decide: a zone whose two deciding
+/// apertures lie either side of one of `limits` [mm] with the reference's
+/// within `band` [mm] (its estimated error) of that limit. A verdict that
+/// differs for any other reason (a temperature, a missing reading) counts.
+fn verdicts_beyond_band(
+    a: &HashMap<ZoneId, Sample>,
+    reference: &HashMap<ZoneId, Sample>,
+    limits: &[f64],
+    band: f64,
+) -> usize {
+    reference
+        .iter()
+        .filter(|(id, r)| {
+            let Some(s) = a.get(id) else {
+                return true;
+            };
+            if s.verdict == r.verdict {
+                return false;
+            }
+            let (Some(x), Some(y)) = (s.deciding, r.deciding) else {
+                return true;
+            };
+            !limits
+                .iter()
+                .any(|&l| (x - l) * (y - l) <= 0.0 && (y - l).abs() <= band)
+        })
+        .count()
 }
 
 /// The largest deciding-aperture difference between two runs [mm].
@@ -461,6 +497,12 @@ pub fn study(
         outcomes.push(o);
     }
     let (chains, note, estimate) = chains_and_estimate(&outcomes, &reference.levels);
+    let p = &inputs.scene.planner;
+    let limits = [p.min_aperture_mm, p.marginal_aperture_mm];
+    for o in outcomes.iter_mut() {
+        o.row.verdicts_beyond_band =
+            verdicts_beyond_band(&o.samples, &reference_samples, &limits, estimate);
+    }
     let mut rows: Vec<Row> = outcomes.into_iter().map(|o| o.row).collect();
     for row in rows.iter_mut() {
         row.rate = chains.get(&row.knob).copied().flatten();
@@ -583,6 +625,14 @@ pub fn refine_mesh(scene: &mut Scene, along: f64, across: f64, layers: u32) -> b
     }
 }
 
+/// The scene key's value of a capacity form.
+fn capacity_name(c: CapacityKind) -> &'static str {
+    match c {
+        CapacityKind::Lumped => "lumped",
+        CapacityKind::Consistent => "consistent",
+    }
+}
+
 /// The scene key's value of a solid element.
 fn element_name(e: SolidElement) -> &'static str {
     match e {
@@ -616,7 +666,7 @@ fn scale_steps(scene: &mut Scene, k: f64) {
 }
 
 /// The default ladder of `scene`: the scene as given; the thermal steps
-/// ×2, ×½, ×¼; the multi-rate schedule; consistent capacity;
+/// ×2, ×½, ×¼; the multi-rate schedule; the other capacity form;
 /// Crank–Nicolson; PCG at 1e-10; mechanical steps up to 3 days; elements
 /// across ×½ (when even) and ×2, along ×2, layers per lift ×2 (blocks);
 /// the presets. The reference: elements along and across ×2, steps ×¼ and
@@ -637,9 +687,16 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         None,
         multi_rate,
     ));
-    l.push(Setting::new("consistent capacity", "capacity", None, |s| {
-        s.time.capacity = CapacityKind::Consistent
-    }));
+    let other = match scene.time.capacity {
+        CapacityKind::Lumped => CapacityKind::Consistent,
+        CapacityKind::Consistent => CapacityKind::Lumped,
+    };
+    l.push(Setting::new(
+        format!("{} capacity", capacity_name(other)),
+        "capacity",
+        None,
+        move |s| s.time.capacity = other,
+    ));
     l.push(Setting::new("theta 0.5", "theta", None, |s| {
         s.time.theta = 0.5
     }));
@@ -731,12 +788,12 @@ pub fn write(table: &AccuracyTable, out: &Path) -> Result<(), StudyError> {
 
 /// The table as CSV, one row per setting.
 pub fn csv(t: &AccuracyTable) -> String {
-    let mut s = String::from("setting,knob,h,elements,thermal_dofs,mech_dofs,steps,wall_s,max_aperture_err_mm,rms_aperture_err_mm,max_point_err_mm,max_temp_err_c,verdicts_differ,rate,pareto\n");
+    let mut s = String::from("setting,knob,h,elements,thermal_dofs,mech_dofs,steps,wall_s,max_aperture_err_mm,rms_aperture_err_mm,max_point_err_mm,max_temp_err_c,verdicts_differ,verdicts_beyond_band,rate,pareto\n");
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
     for r in &t.rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{:.3},{:.6},{:.6},{:.6},{:.4},{},{},{}",
+            "{},{},{},{},{},{},{},{:.3},{:.6},{:.6},{:.6},{:.4},{},{},{},{}",
             r.name,
             r.knob,
             opt(r.h),
@@ -750,6 +807,7 @@ pub fn csv(t: &AccuracyTable) -> String {
             r.max_point_err_mm,
             r.max_temp_err_c,
             r.verdicts_differ,
+            r.verdicts_beyond_band,
             r.rate.map_or(String::new(), |p| format!("{p:.3}")),
             r.pareto
         );
@@ -782,14 +840,14 @@ pub fn zones_csv(t: &AccuracyTable) -> String {
 /// The table in Markdown, with the reference's estimated error.
 pub fn markdown(t: &AccuracyTable) -> String {
     let mut s = format!(
-        "# Accuracy against time: {}\n\n{} zones judged on their planned dates against the reference (estimated error of its deciding aperture {:.3} mm: {}). `*` marks the Pareto front (no setting both faster and more accurate).\n\n",
+        "# Accuracy against time: {}\n\n{} zones judged on their planned dates against the reference (estimated error of its deciding aperture {:.3} mm: {}). `*` marks the Pareto front (no setting both faster and more accurate). \"beyond band\" leaves out the zones whose deciding aperture lies within that error of an aperture limit on the reference and across it on the setting: the reference cannot decide them.\n\n",
         t.scene, t.zones, t.reference_error_mm, t.reference_note
     );
-    s += "| setting | elements | dofs (thermal / mech.) | wall s | deciding aperture max / RMS err mm | any point mm | temperature err °C | verdicts differ | rate p | front |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+    s += "| setting | elements | dofs (thermal / mech.) | wall s | deciding aperture max / RMS err mm | any point mm | temperature err °C | verdicts differ | beyond band | rate p | front |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
     for r in &t.rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} / {} | {:.1} | {:.3} / {:.3} | {:.3} | {:.2} | {} | {} | {} |",
+            "| {} | {} | {} / {} | {:.1} | {:.3} / {:.3} | {:.3} | {:.2} | {} | {} | {} | {} |",
             r.name,
             r.elements,
             r.thermal_dofs,
@@ -800,6 +858,7 @@ pub fn markdown(t: &AccuracyTable) -> String {
             r.max_point_err_mm,
             r.max_temp_err_c,
             r.verdicts_differ,
+            r.verdicts_beyond_band,
             r.rate.map_or(String::new(), |p| format!("{p:.2}")),
             if r.pareto { "*" } else { "" }
         );
@@ -975,6 +1034,52 @@ mod tests {
         assert!((p - 2.0).abs() < 1e-12, "p = {p}");
         assert_eq!(fit_rate(&[1.0], &[2.0]), None);
         assert_eq!(fit_rate(&[1.0, 1.0], &[2.0, 3.0]), None);
+    }
+
+    /// Zones 1–4 differ from the reference: zone 1 straddles 0.5 mm within
+    /// the band (not counted), zone 2 straddles it farther than the band,
+    /// zone 3 straddles 0.7 mm within it (not counted), zone 4 differs on
+    /// the same side of both limits (a temperature: counted); zone 5 agrees.
+    #[test]
+    fn verdicts_within_the_references_band_are_left_out() {
+        use Verdict::*;
+        let sample = |a: f64, v: Verdict| Sample {
+            apertures: Apertures::default(),
+            deciding: Some(a),
+            temps: [None, None],
+            verdict: v,
+        };
+        let zone = |z: u32| ZoneId::new(1, z);
+        let reference: HashMap<ZoneId, Sample> = [
+            (zone(1), sample(0.494, NotGroutable)),
+            (zone(2), sample(0.40, NotGroutable)),
+            (zone(3), sample(0.69, Marginal)),
+            (zone(4), sample(1.20, Groutable)),
+            (zone(5), sample(1.00, Groutable)),
+        ]
+        .into();
+        let setting: HashMap<ZoneId, Sample> = [
+            (zone(1), sample(0.503, Marginal)),
+            (zone(2), sample(0.55, Marginal)),
+            (zone(3), sample(0.72, Groutable)),
+            (zone(4), sample(1.25, NotGroutable)),
+            (zone(5), sample(1.01, Groutable)),
+        ]
+        .into();
+        let limits = [0.5, 0.7];
+        assert_eq!(
+            verdicts_beyond_band(&setting, &reference, &limits, 0.062),
+            2
+        );
+        // No band: every differing zone counts; a wide one leaves zone 2 out too.
+        assert_eq!(verdicts_beyond_band(&setting, &reference, &limits, 0.0), 4);
+        assert_eq!(verdicts_beyond_band(&setting, &reference, &limits, 0.2), 1);
+        // A zone the setting did not judge counts.
+        let missing: HashMap<ZoneId, Sample> = HashMap::new();
+        assert_eq!(
+            verdicts_beyond_band(&missing, &reference, &limits, 0.062),
+            5
+        );
     }
 
     #[test]

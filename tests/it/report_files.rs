@@ -912,6 +912,7 @@ fn terminal_table_says_what_the_set_saved_and_leaves_the_cautions_to_the_report(
             zone_by_zone_c: 1.25,
             set_c: 1.25,
             set_zone_by_zone_c: 1.5,
+            zone_by_zone_held: true,
         });
     };
     set(&mut plan, 1.25);

@@ -62,11 +62,24 @@ fn tiny_ladder_against_its_reference() {
     assert!(coarse.rate.is_some(), "{coarse:?}");
     assert!(table.reference_error_mm > 0.0, "{}", table.reference_note);
     // The reference and its copy have error 0: the faster of the two is on
-    // the front, and the coarser setting only if it is faster still.
+    // the front; the coarser setting is on it exactly when no setting is
+    // both as fast and as accurate (wall times vary with the machine's
+    // load, so the scene as given may be the one that beats it).
     let (r, c) = (row("reference"), row("copy of the reference"));
     let exact = if r.seconds <= c.seconds { r } else { c };
     assert!(exact.pareto, "{exact:?}");
-    assert_eq!(coarse.pareto, coarse.seconds < exact.seconds);
+    let beaten = table.rows.iter().any(|o| {
+        o.seconds <= coarse.seconds
+            && o.max_aperture_err_mm <= coarse.max_aperture_err_mm
+            && (o.seconds < coarse.seconds || o.max_aperture_err_mm < coarse.max_aperture_err_mm)
+    });
+    assert_eq!(coarse.pareto, !beaten, "{:?}", table.rows);
+    assert!(!coarse.pareto || coarse.seconds < exact.seconds);
+    // The zones beyond the reference's band are among those that differ.
+    assert!(table
+        .rows
+        .iter()
+        .all(|r| r.verdicts_beyond_band <= r.verdicts_differ));
 
     let out = tempfile::tempdir().unwrap();
     accuracy::write(&table, out.path()).unwrap();
