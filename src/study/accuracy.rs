@@ -283,14 +283,19 @@ fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneI
 }
 
 /// The zones whose verdict in `a` differs from the reference's, leaving
-/// out those the reference cannot decide: a zone whose two deciding
-/// apertures lie either side of one of `limits` [mm] with the reference's
-/// within `band` [mm] (its estimated error) of that limit. A verdict that
-/// differs for any other reason (a temperature, a missing reading) counts.
+/// out those the reference cannot decide: the two deciding apertures lie
+/// either side of the aperture limit that separates the two verdicts, the
+/// reference's within `band` [mm] (its estimated error) of it. `limits`
+/// are `[min_aperture_mm, marginal_aperture_mm]`: the first separates not
+/// groutable from the others (the side below it is not groutable whatever
+/// else holds, so a verdict pair with one not groutable across it differs
+/// by the aperture alone), the second marginal from groutable. A verdict
+/// that differs for any other reason (a temperature, a missing reading)
+/// counts.
 fn verdicts_beyond_band(
     a: &HashMap<ZoneId, Sample>,
     reference: &HashMap<ZoneId, Sample>,
-    limits: &[f64],
+    limits: [f64; 2],
     band: f64,
 ) -> usize {
     reference
@@ -305,9 +310,13 @@ fn verdicts_beyond_band(
             let (Some(x), Some(y)) = (s.deciding, r.deciding) else {
                 return true;
             };
-            !limits
-                .iter()
-                .any(|&l| (x - l) * (y - l) <= 0.0 && (y - l).abs() <= band)
+            let ng = |v: Verdict| v == Verdict::NotGroutable;
+            let limit = if ng(s.verdict) != ng(r.verdict) {
+                limits[0]
+            } else {
+                limits[1]
+            };
+            !((x - limit) * (y - limit) <= 0.0 && (y - limit).abs() <= band)
         })
         .count()
 }
@@ -501,7 +510,7 @@ pub fn study(
     let limits = [p.min_aperture_mm, p.marginal_aperture_mm];
     for o in outcomes.iter_mut() {
         o.row.verdicts_beyond_band =
-            verdicts_beyond_band(&o.samples, &reference_samples, &limits, estimate);
+            verdicts_beyond_band(&o.samples, &reference_samples, limits, estimate);
     }
     let mut rows: Vec<Row> = outcomes.into_iter().map(|o| o.row).collect();
     for row in rows.iter_mut() {
@@ -1036,10 +1045,12 @@ mod tests {
         assert_eq!(fit_rate(&[1.0, 1.0], &[2.0, 3.0]), None);
     }
 
-    /// Zones 1–4 differ from the reference: zone 1 straddles 0.5 mm within
-    /// the band (not counted), zone 2 straddles it farther than the band,
-    /// zone 3 straddles 0.7 mm within it (not counted), zone 4 differs on
-    /// the same side of both limits (a temperature: counted); zone 5 agrees.
+    /// Zones 1–4 and 6 differ from the reference: zone 1 straddles 0.5 mm
+    /// within the band (not counted), zone 2 straddles it farther than the
+    /// band, zone 3 straddles 0.7 mm within it (not counted), zone 4 differs
+    /// on the same side of both limits (a temperature: counted), zone 6
+    /// straddles 0.7 mm but its verdicts (not groutable, groutable) are not
+    /// the two that limit separates (counted); zone 5 agrees.
     #[test]
     fn verdicts_within_the_references_band_are_left_out() {
         use Verdict::*;
@@ -1056,6 +1067,7 @@ mod tests {
             (zone(3), sample(0.69, Marginal)),
             (zone(4), sample(1.20, Groutable)),
             (zone(5), sample(1.00, Groutable)),
+            (zone(6), sample(0.677, NotGroutable)),
         ]
         .into();
         let setting: HashMap<ZoneId, Sample> = [
@@ -1064,22 +1076,18 @@ mod tests {
             (zone(3), sample(0.72, Groutable)),
             (zone(4), sample(1.25, NotGroutable)),
             (zone(5), sample(1.01, Groutable)),
+            (zone(6), sample(1.278, Groutable)),
         ]
         .into();
         let limits = [0.5, 0.7];
-        assert_eq!(
-            verdicts_beyond_band(&setting, &reference, &limits, 0.062),
-            2
-        );
-        // No band: every differing zone counts; a wide one leaves zone 2 out too.
-        assert_eq!(verdicts_beyond_band(&setting, &reference, &limits, 0.0), 4);
-        assert_eq!(verdicts_beyond_band(&setting, &reference, &limits, 0.2), 1);
+        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 0.062), 3);
+        // No band: every differing zone counts; a wide one leaves zone 2 out
+        // too, never zone 6.
+        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 0.0), 5);
+        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 1.8), 2);
         // A zone the setting did not judge counts.
         let missing: HashMap<ZoneId, Sample> = HashMap::new();
-        assert_eq!(
-            verdicts_beyond_band(&missing, &reference, &limits, 0.062),
-            5
-        );
+        assert_eq!(verdicts_beyond_band(&missing, &reference, limits, 0.062), 6);
     }
 
     #[test]
