@@ -133,6 +133,9 @@ pub struct AccuracyTable {
     pub reference_error_mm: f64,
     /// how the estimate was made, knob by knob
     pub reference_note: String,
+    /// the same estimate of the warmer block's zone temperature [°C]
+    pub reference_error_c: f64,
+    pub reference_note_c: String,
     /// settings whose run failed, with the error
     pub failed: Vec<(String, String)>,
     /// every setting's reading of every judged zone, in ladder order
@@ -159,7 +162,44 @@ struct Sample {
     apertures: Apertures,
     deciding: Option<f64>,
     temps: [Option<f64>; 2],
+    /// the temperature rule's limit at the zone: closure + tolerance [°C]
+    temp_limit_c: f64,
     verdict: Verdict,
+}
+
+impl Sample {
+    /// The warmer of the two blocks' zone temperatures, which the
+    /// temperature rule decides on [°C].
+    fn warmer(&self) -> Option<f64> {
+        match self.temps {
+            [Some(a), Some(b)] => Some(a.max(b)),
+            [a, b] => a.or(b),
+        }
+    }
+}
+
+/// What a Richardson estimate is made of: the deciding aperture [mm] or
+/// the warmer block's zone temperature [°C].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Quantity {
+    Aperture,
+    Temperature,
+}
+
+impl Quantity {
+    fn of(self, s: &Sample) -> Option<f64> {
+        match self {
+            Quantity::Aperture => s.deciding,
+            Quantity::Temperature => s.warmer(),
+        }
+    }
+
+    fn unit(self) -> &'static str {
+        match self {
+            Quantity::Aperture => "mm",
+            Quantity::Temperature => "°C",
+        }
+    }
 }
 
 /// A finished run of one setting.
@@ -217,6 +257,7 @@ fn run_setting(
                 deciding: r.apertures_mm.at(scene.planner.aperture_point),
                 apertures: r.apertures_mm,
                 temps: [r.temp_a_c, r.temp_b_c],
+                temp_limit_c: r.closure_temp_c + scene.planner.closure_tolerance_c,
                 verdict: r.verdict,
             };
             (id, sample)
@@ -285,18 +326,19 @@ fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneI
 /// The zones whose verdict in `a` differs from the reference's, leaving
 /// out those the reference cannot decide: the two deciding apertures lie
 /// either side of the aperture limit that separates the two verdicts, the
-/// reference's within `band` [mm] (its estimated error) of it. `limits`
-/// are `[min_aperture_mm, marginal_aperture_mm]`: the first separates not
-/// groutable from the others (the side below it is not groutable whatever
-/// else holds, so a verdict pair with one not groutable across it differs
-/// by the aperture alone), the second marginal from groutable. A verdict
-/// that differs for any other reason (a temperature, a missing reading)
-/// counts.
+/// reference's within `band[0]` [mm] (its estimated error) of it; or, for
+/// a not-groutable verdict against another, the two warmer zone
+/// temperatures lie either side of the temperature limit, the reference's
+/// within `band[1]` [°C] of it. `limits` are `[min_aperture_mm,
+/// marginal_aperture_mm]`: the first separates not groutable from the
+/// others (the side below it is not groutable whatever else holds), the
+/// second marginal from groutable. A verdict that differs for any other
+/// reason (age, cover, a missing reading) counts.
 fn verdicts_beyond_band(
     a: &HashMap<ZoneId, Sample>,
     reference: &HashMap<ZoneId, Sample>,
     limits: [f64; 2],
-    band: f64,
+    band: [f64; 2],
 ) -> usize {
     reference
         .iter()
@@ -307,24 +349,29 @@ fn verdicts_beyond_band(
             if s.verdict == r.verdict {
                 return false;
             }
-            let (Some(x), Some(y)) = (s.deciding, r.deciding) else {
-                return true;
+            let across = |x: Option<f64>, y: Option<f64>, limit: f64, band: f64| {
+                x.zip(y).is_some_and(|(x, y)| {
+                    (x - limit) * (y - limit) <= 0.0 && (y - limit).abs() <= band
+                })
             };
             let ng = |v: Verdict| v == Verdict::NotGroutable;
-            let limit = if ng(s.verdict) != ng(r.verdict) {
-                limits[0]
-            } else {
-                limits[1]
-            };
-            !((x - limit) * (y - limit) <= 0.0 && (y - limit).abs() <= band)
+            let one_ng = ng(s.verdict) != ng(r.verdict);
+            let limit = if one_ng { limits[0] } else { limits[1] };
+            let by_aperture = across(s.deciding, r.deciding, limit, band[0]);
+            let by_temperature = one_ng && across(s.warmer(), r.warmer(), r.temp_limit_c, band[1]);
+            !(by_aperture || by_temperature)
         })
         .count()
 }
 
-/// The largest deciding-aperture difference between two runs [mm].
-fn largest_difference(a: &HashMap<ZoneId, Sample>, b: &HashMap<ZoneId, Sample>) -> f64 {
+/// The largest difference of `q` between two runs.
+fn largest_difference(
+    q: Quantity,
+    a: &HashMap<ZoneId, Sample>,
+    b: &HashMap<ZoneId, Sample>,
+) -> f64 {
     a.iter()
-        .filter_map(|(id, s)| Some((s.deciding?, b.get(id)?.deciding?)))
+        .filter_map(|(id, s)| Some((q.of(s)?, q.of(b.get(id)?)?)))
         .map(|(x, y)| (x - y).abs())
         .fold(0.0, f64::max)
 }
@@ -505,12 +552,19 @@ pub fn study(
         ));
         outcomes.push(o);
     }
-    let (chains, note, estimate) = chains_and_estimate(&outcomes, &reference.levels);
+    let (chains, note, estimate) =
+        chains_and_estimate(&outcomes, &reference.levels, Quantity::Aperture);
+    let (_, note_c, estimate_c) =
+        chains_and_estimate(&outcomes, &reference.levels, Quantity::Temperature);
     let p = &inputs.scene.planner;
     let limits = [p.min_aperture_mm, p.marginal_aperture_mm];
     for o in outcomes.iter_mut() {
-        o.row.verdicts_beyond_band =
-            verdicts_beyond_band(&o.samples, &reference_samples, limits, estimate);
+        o.row.verdicts_beyond_band = verdicts_beyond_band(
+            &o.samples,
+            &reference_samples,
+            limits,
+            [estimate, estimate_c],
+        );
     }
     let mut rows: Vec<Row> = outcomes.into_iter().map(|o| o.row).collect();
     for row in rows.iter_mut() {
@@ -532,15 +586,19 @@ pub fn study(
         failed,
         reference_error_mm: estimate,
         reference_note: note,
+        reference_error_c: estimate_c,
+        reference_note_c: note_c,
         zone_values,
     })
 }
 
 /// The rate of every knob chain (its settings with an `h` and the scene as
-/// given at h = 1), and the reference's Richardson estimate with its note.
+/// given at h = 1), and the reference's Richardson estimate of `q` with
+/// its note.
 fn chains_and_estimate(
     outcomes: &[Outcome],
     levels: &[(String, f64)],
+    q: Quantity,
 ) -> (HashMap<String, Option<f64>>, String, f64) {
     let base = outcomes.iter().find(|o| o.row.knob == SCENE);
     let mut knobs: Vec<&str> = outcomes
@@ -563,7 +621,12 @@ fn chains_and_estimate(
         // Coarsest first; d_i between level i and i+1, at the coarser h.
         let (hs, ds): (Vec<f64>, Vec<f64>) = chain
             .windows(2)
-            .map(|w| (w[0].0, largest_difference(&w[0].1.samples, &w[1].1.samples)))
+            .map(|w| {
+                (
+                    w[0].0,
+                    largest_difference(q, &w[0].1.samples, &w[1].1.samples),
+                )
+            })
             .unzip();
         let fitted = if ds.len() >= 2 {
             fit_rate(&hs, &ds)
@@ -578,16 +641,18 @@ fn chains_and_estimate(
         // asymptotic range; dividing by 2^p − 1 ≈ 0 would blow the
         // estimate up, so first order is assumed there.
         let p = fitted.filter(|p| *p >= 0.5).unwrap_or(1.0);
-        let rich = largest_difference(&fine.samples, &coarse.samples) / ((h2 / h1).powf(p) - 1.0);
+        let rich =
+            largest_difference(q, &fine.samples, &coarse.samples) / ((h2 / h1).powf(p) - 1.0);
         let ref_h = levels.iter().find(|l| l.0 == knob).map_or(1.0, |l| l.1);
         let gap = chain
             .iter()
             .find(|c| (c.0 - ref_h).abs() < 1e-12)
-            .map_or(0.0, |c| largest_difference(&c.1.samples, &fine.samples));
+            .map_or(0.0, |c| largest_difference(q, &c.1.samples, &fine.samples));
         total += rich + gap;
         notes.push(format!(
-            "{knob}: {:.3} mm (p = {}{}, h {} → {}{})",
+            "{knob}: {:.3} {} (p = {}{}, h {} → {}{})",
             rich + gap,
+            q.unit(),
             crate::report::svg::num(p, 2),
             match fitted {
                 Some(f) if f >= 0.5 => " fitted".to_string(),
@@ -597,7 +662,10 @@ fn chains_and_estimate(
             crate::report::svg::num(h2, 3),
             crate::report::svg::num(h1, 3),
             if gap > 0.0 {
-                format!("; the reference is at h = {ref_h}, {gap:.3} mm from the finest")
+                format!(
+                    "; the reference is at h = {ref_h}, {gap:.3} {} from the finest",
+                    q.unit()
+                )
             } else {
                 String::new()
             }
@@ -849,8 +917,8 @@ pub fn zones_csv(t: &AccuracyTable) -> String {
 /// The table in Markdown, with the reference's estimated error.
 pub fn markdown(t: &AccuracyTable) -> String {
     let mut s = format!(
-        "# Accuracy against time: {}\n\n{} zones judged on their planned dates against the reference (estimated error of its deciding aperture {:.3} mm: {}). `*` marks the Pareto front (no setting both faster and more accurate). \"beyond band\" leaves out the zones whose deciding aperture lies within that error of an aperture limit on the reference and across it on the setting: the reference cannot decide them.\n\n",
-        t.scene, t.zones, t.reference_error_mm, t.reference_note
+        "# Accuracy against time: {}\n\n{} zones judged on their planned dates against the reference (estimated error of its deciding aperture {:.3} mm: {}; of the warmer block's zone temperature {:.2} °C: {}). `*` marks the Pareto front (no setting both faster and more accurate). \"beyond band\" leaves out the zones whose deciding aperture (or, for a not-groutable verdict, warmer zone temperature) lies within that error of the limit separating the two verdicts on the reference and across it on the setting: the reference cannot decide them.\n\n",
+        t.scene, t.zones, t.reference_error_mm, t.reference_note, t.reference_error_c, t.reference_note_c
     );
     s += "| setting | elements | dofs (thermal / mech.) | wall s | deciding aperture max / RMS err mm | any point mm | temperature err °C | verdicts differ | beyond band | rate p | front |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
     for r in &t.rows {
@@ -1057,7 +1125,8 @@ mod tests {
         let sample = |a: f64, v: Verdict| Sample {
             apertures: Apertures::default(),
             deciding: Some(a),
-            temps: [None, None],
+            temps: [Some(12.0), Some(11.0)],
+            temp_limit_c: 13.5,
             verdict: v,
         };
         let zone = |z: u32| ZoneId::new(1, z);
@@ -1080,14 +1149,36 @@ mod tests {
         ]
         .into();
         let limits = [0.5, 0.7];
-        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 0.062), 3);
+        assert_eq!(
+            verdicts_beyond_band(&setting, &reference, limits, [0.062, 0.0]),
+            3
+        );
         // No band: every differing zone counts; a wide one leaves zone 2 out
         // too, never zone 6.
-        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 0.0), 5);
-        assert_eq!(verdicts_beyond_band(&setting, &reference, limits, 1.8), 2);
+        assert_eq!(
+            verdicts_beyond_band(&setting, &reference, limits, [0.0, 0.0]),
+            5
+        );
+        assert_eq!(
+            verdicts_beyond_band(&setting, &reference, limits, [1.8, 0.0]),
+            2
+        );
         // A zone the setting did not judge counts.
         let missing: HashMap<ZoneId, Sample> = HashMap::new();
-        assert_eq!(verdicts_beyond_band(&missing, &reference, limits, 0.062), 6);
+        assert_eq!(
+            verdicts_beyond_band(&missing, &reference, limits, [0.062, 0.0]),
+            6
+        );
+        // Zone 4 is not groutable on the setting at 13.6 °C (limit 13.5)
+        // and groutable on the reference at 13.45 °C: within a 0.1 °C band
+        // it is left out, within 0.01 °C it counts; zone 6's
+        // temperatures do not straddle the limit, so it counts.
+        let mut warm = setting.clone();
+        warm.get_mut(&zone(4)).unwrap().temps = [Some(13.6), Some(12.0)];
+        let mut cool = reference.clone();
+        cool.get_mut(&zone(4)).unwrap().temps = [Some(11.0), Some(13.45)];
+        assert_eq!(verdicts_beyond_band(&warm, &cool, limits, [0.062, 0.1]), 2);
+        assert_eq!(verdicts_beyond_band(&warm, &cool, limits, [0.062, 0.01]), 3);
     }
 
     #[test]
