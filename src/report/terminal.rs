@@ -203,7 +203,8 @@ fn flagged_details(out: &mut String, plan: &Plan) {
         for l in wrap(&remedy, "  → remedy: ", "    ", LINE_WIDTH) {
             let _ = writeln!(out, "{l}");
         }
-        // Neighbours supercooled as one set: say so, and what it saved.
+        // Neighbours supercooled as one set: say so, and what it saved (or
+        // that the zone-by-zone steps failed applied together).
         if let Some(r) = z
             .remedy
             .as_ref()
