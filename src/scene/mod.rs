@@ -351,6 +351,16 @@ pub enum CapacityKind {
     Consistent,
 }
 
+impl CapacityKind {
+    /// The other form (the accuracy study's capacity knob).
+    pub fn other(self) -> CapacityKind {
+        match self {
+            CapacityKind::Lumped => CapacityKind::Consistent,
+            CapacityKind::Consistent => CapacityKind::Lumped,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TimeStepping {
@@ -505,6 +515,16 @@ pub enum SolidElement {
     /// condensation per element once, and the modes' amplitudes recovered
     /// at each step.
     Hex8Incompatible,
+}
+
+impl SolidElement {
+    /// The other element (the accuracy study's element knob).
+    pub fn other(self) -> SolidElement {
+        match self {
+            SolidElement::Hex8 => SolidElement::Hex8Incompatible,
+            SolidElement::Hex8Incompatible => SolidElement::Hex8,
+        }
+    }
 }
 
 impl SolidElement {

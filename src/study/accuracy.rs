@@ -702,6 +702,17 @@ pub fn refine_mesh(scene: &mut Scene, along: f64, across: f64, layers: u32) -> b
     }
 }
 
+/// The setting of a knob that switches the scene to the other of two
+/// forms (`value`), by `set`.
+fn other_form<T: Copy + Send + Sync + 'static>(
+    name: String,
+    knob: &str,
+    value: T,
+    set: fn(&mut Scene, T),
+) -> Setting {
+    Setting::new(name, knob, None, move |s| set(s, value))
+}
+
 /// The scene key's value of a capacity form.
 fn capacity_name(c: CapacityKind) -> &'static str {
     match c {
@@ -764,16 +775,11 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         None,
         multi_rate,
     ));
-    let other = match scene.time.capacity {
-        CapacityKind::Lumped => CapacityKind::Consistent,
-        CapacityKind::Consistent => CapacityKind::Lumped,
-    };
-    l.push(Setting::new(
-        format!("{} capacity", capacity_name(other)),
-        "capacity",
-        None,
-        move |s| s.time.capacity = other,
-    ));
+    let capacity = scene.time.capacity.other();
+    let name = format!("{} capacity", capacity_name(capacity));
+    l.push(other_form(name, "capacity", capacity, |s, c| {
+        s.time.capacity = c
+    }));
     l.push(Setting::new("theta 0.5", "theta", None, |s| {
         s.time.theta = 0.5
     }));
@@ -786,16 +792,11 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         l.push(Setting::new("mechanics 3 d", "mechanics step", None, |s| {
             s.time.mechanics_max_step_days = 3
         }));
-        let other = match scene.solver.element {
-            SolidElement::Hex8 => SolidElement::Hex8Incompatible,
-            SolidElement::Hex8Incompatible => SolidElement::Hex8,
-        };
-        l.push(Setting::new(
-            format!("element {}", element_name(other)),
-            "element",
-            None,
-            move |s| s.solver.element = other,
-        ));
+        let element = scene.solver.element.other();
+        let name = format!("element {}", element_name(element));
+        l.push(other_form(name, "element", element, |s, e| {
+            s.solver.element = e
+        }));
     }
     let mut probe = scene.clone();
     let blocks = refine_mesh(&mut probe, 1.0, 1.0, 2);
@@ -1130,24 +1131,25 @@ mod tests {
             verdict: v,
         };
         let zone = |z: u32| ZoneId::new(1, z);
-        let reference: HashMap<ZoneId, Sample> = [
-            (zone(1), sample(0.494, NotGroutable)),
-            (zone(2), sample(0.40, NotGroutable)),
-            (zone(3), sample(0.69, Marginal)),
-            (zone(4), sample(1.20, Groutable)),
-            (zone(5), sample(1.00, Groutable)),
-            (zone(6), sample(0.677, NotGroutable)),
-        ]
-        .into();
-        let setting: HashMap<ZoneId, Sample> = [
-            (zone(1), sample(0.503, Marginal)),
-            (zone(2), sample(0.55, Marginal)),
-            (zone(3), sample(0.72, Groutable)),
-            (zone(4), sample(1.25, NotGroutable)),
-            (zone(5), sample(1.01, Groutable)),
-            (zone(6), sample(1.278, Groutable)),
-        ]
-        .into();
+        // zone: (reference, setting)
+        let cases = [
+            ((0.494, NotGroutable), (0.503, Marginal)),
+            ((0.40, NotGroutable), (0.55, Marginal)),
+            ((0.69, Marginal), (0.72, Groutable)),
+            ((1.20, Groutable), (1.25, NotGroutable)),
+            ((1.00, Groutable), (1.01, Groutable)),
+            ((0.677, NotGroutable), (1.278, Groutable)),
+        ];
+        let run = |setting: bool| {
+            (1..)
+                .zip(&cases)
+                .map(|(z, &(r, s))| {
+                    let (a, v) = if setting { s } else { r };
+                    (zone(z), sample(a, v))
+                })
+                .collect::<HashMap<ZoneId, Sample>>()
+        };
+        let (reference, setting) = (run(false), run(true));
         let limits = [0.5, 0.7];
         assert_eq!(
             verdicts_beyond_band(&setting, &reference, limits, [0.062, 0.0]),
