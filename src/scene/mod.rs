@@ -352,6 +352,14 @@ pub enum CapacityKind {
 }
 
 impl CapacityKind {
+    /// The scene key's value.
+    pub fn name(self) -> &'static str {
+        match self {
+            CapacityKind::Lumped => "lumped",
+            CapacityKind::Consistent => "consistent",
+        }
+    }
+
     /// The other form (the accuracy study's capacity knob).
     pub fn other(self) -> CapacityKind {
         match self {
@@ -518,6 +526,14 @@ pub enum SolidElement {
 }
 
 impl SolidElement {
+    /// The scene key's value.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolidElement::Hex8 => "hex8",
+            SolidElement::Hex8Incompatible => "hex8_incompatible",
+        }
+    }
+
     /// The other element (the accuracy study's element knob).
     pub fn other(self) -> SolidElement {
         match self {

@@ -40,7 +40,7 @@ use crate::mesh::geometry::Geometry;
 use crate::planner::rules::{HistoryIndex, Rules};
 use crate::planner::search::grout_days;
 use crate::planner::{Apertures, Verdict};
-use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, SolidElement, ThermalSolverKind};
+use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, ThermalSolverKind};
 use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Simulation};
 use crate::vocab::{fnv1a, Day, ZoneId};
@@ -713,22 +713,6 @@ fn other_form<T: Copy + Send + Sync + 'static>(
     Setting::new(name, knob, None, move |s| set(s, value))
 }
 
-/// The scene key's value of a capacity form.
-fn capacity_name(c: CapacityKind) -> &'static str {
-    match c {
-        CapacityKind::Lumped => "lumped",
-        CapacityKind::Consistent => "consistent",
-    }
-}
-
-/// The scene key's value of a solid element.
-fn element_name(e: SolidElement) -> &'static str {
-    match e {
-        SolidElement::Hex8 => "hex8",
-        SolidElement::Hex8Incompatible => "hex8_incompatible",
-    }
-}
-
 /// The explicit multi-rate schedule of the issue: 0.1 d for 2 days after
 /// each pour, 0.25 d to day 7, then at most 1 d.
 pub fn multi_rate(scene: &mut Scene) {
@@ -776,7 +760,7 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         multi_rate,
     ));
     let capacity = scene.time.capacity.other();
-    let name = format!("{} capacity", capacity_name(capacity));
+    let name = format!("{} capacity", capacity.name());
     l.push(other_form(name, "capacity", capacity, |s, c| {
         s.time.capacity = c
     }));
@@ -793,7 +777,7 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
             s.time.mechanics_max_step_days = 3
         }));
         let element = scene.solver.element.other();
-        let name = format!("element {}", element_name(element));
+        let name = format!("element {}", element.name());
         l.push(other_form(name, "element", element, |s, e| {
             s.solver.element = e
         }));
