@@ -34,6 +34,7 @@
 //! tests of `fem::elasticity` and the material tests of `material::creep`;
 //! the joints by `tests/it/joint_two_blocks.rs` and `tests/it/joint_friction.rs`.
 
+pub mod ahead;
 pub mod contact_step;
 pub mod grout_stops;
 pub mod joints;

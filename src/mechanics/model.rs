@@ -16,7 +16,10 @@ use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::scene::{OrderingKind, SolidElement};
 use crate::vocab::JointState;
 
-use super::contact_step::{self, JointSolveSettings, JointStepError, RefactorCounts, StepSystem};
+use super::ahead::{AheadStats, FactorAhead};
+use super::contact_step::{
+    self, JointSolveSettings, JointStepError, Prepared, RefactorCounts, StepSystem,
+};
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
 use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
@@ -157,6 +160,11 @@ pub struct MechStats {
     /// time is part of `seconds_joints`)
     #[serde(default)]
     pub capacitance: CapacitanceStats,
+    /// the next steps' factorisations made on the second core
+    /// ([`super::ahead`]; also counted in `numeric`, their time not in
+    /// `seconds_numeric`)
+    #[serde(default)]
+    pub ahead: AheadStats,
 }
 
 /// Checkpointable mechanical state.
@@ -231,6 +239,8 @@ pub struct MechanicsModel {
     zone_stop_samples: HashMap<(u32, u32), Vec<StopSample>>,
     pub state: MechState,
     pub stats: MechStats,
+    /// the next step's factorisation, made while this one runs
+    ahead: FactorAhead,
 }
 
 /// Per-element constants of the mechanical problem, computed once.
@@ -426,6 +436,7 @@ impl MechanicsModel {
             state,
             stats,
             points,
+            ahead: FactorAhead::new(factor_ahead(settings)),
         })
     }
 
@@ -436,6 +447,22 @@ impl MechanicsModel {
         self.state = state.clone();
         self.prescribed.clear();
         self.dirty = true;
+        self.ahead.forget();
+    }
+
+    /// Factorise the next step on the second core while a step's contact
+    /// passes run (`solver.factor_ahead`; [`super::ahead`]). Off where the
+    /// cores are otherwise busy; the answer is the same to round-off.
+    pub fn set_factor_ahead(&mut self, on: bool) {
+        self.ahead.set_enabled(on && factor_ahead(&self.settings));
+    }
+
+    /// The interval of the step after the next [`MechanicsModel::step`],
+    /// when no pour or grouting at its start changes the system (the
+    /// driver knows; None otherwise): its factorisation may then be made
+    /// while the next step runs.
+    pub fn set_next_step(&mut self, next: Option<(f64, f64)>) {
+        self.ahead.set_next(next);
     }
 
     /// Pours lift `lift` of `block` on `day`: its elements are born stress-free.
@@ -511,6 +538,7 @@ impl MechanicsModel {
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         self.sys = sys;
         self.dirty = false;
+        self.ahead.forget();
         Ok(())
     }
 
@@ -657,12 +685,78 @@ impl MechanicsModel {
         let x = if self.sys.pairs.is_empty() {
             self.solve_plain(a, b, &prescribed, t1)?
         } else {
-            self.solve_joints(&a, &b, &prescribed, t1)?
+            self.solve_joints_ahead(t0, &a, &b, &prescribed, t1)?
         };
 
         self.commit(&x, &coeffs, &pseudo, &mode_loads, &df_ext, water);
         self.stats.steps += 1;
+        self.stats.ahead = self.ahead.stats;
         Ok(())
+    }
+
+    /// The stiffness K̃ of the live elements over (t0, t1), at their
+    /// mid-step ages (the matrix of [`MechanicsModel::assemble`]).
+    fn stiffness(&self, t0: f64, t1: f64) -> Result<SparseSym, MechError> {
+        let mut a = SparseSym::new(self.sys.pattern.clone());
+        for (slot, el) in self.sys.elements.iter().enumerate() {
+            let e = el.elem as usize;
+            let c = self.coefficients(e, t0, t1)?;
+            match &el.k_unit {
+                Some(k) => a.add_element_scaled(slot, c.e_eff, k),
+                None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
+            }
+        }
+        Ok(a)
+    }
+
+    /// The joint step from the factor made ahead for it, if any, while
+    /// the next step's is made on the other core from the states of this
+    /// step's first pass, when due ([`super::ahead`]).
+    fn solve_joints_ahead(
+        &mut self,
+        t0: f64,
+        a: &SparseSym,
+        b: &[f64],
+        prescribed: &[f64],
+        t1: f64,
+    ) -> Result<Vec<f64>, MechError> {
+        let prepared = self.ahead.take(t0, t1, &mut self.sys, a);
+        let t_asm = Instant::now();
+        // An error of the next step's stiffness is the next step's to report.
+        let order = match self.ahead.due(&self.sys) {
+            Some(next) => self
+                .stiffness(next.0, next.1)
+                .ok()
+                .map(|k| self.ahead.order(next, k)),
+            None => None,
+        };
+        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
+        let Some(order) = order else {
+            return self.solve_joints(a, b, prescribed, t1, prepared, &mut |_, _| {});
+        };
+        let (x, done) = std::thread::scope(|scope| {
+            let mut order = Some(order);
+            let mut handle = None;
+            let mut first_pass = |live: &LiveSystem, states: &[JointPointState]| {
+                if let Some(job) = order.take().and_then(|o| o.job(live, states).ok()) {
+                    handle = Some(job.spawn(scope));
+                }
+            };
+            let x = self.solve_joints(a, b, prescribed, t1, prepared, &mut first_pass);
+            let t = Instant::now();
+            let done = handle.map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
+            (x, done.map(|d| (d, t.elapsed().as_secs_f64())))
+        });
+        match done {
+            Some((done, waited)) => {
+                if self.ahead.finish(done, waited) {
+                    self.stats.numeric += 1;
+                    self.stats.numeric_flops += self.sys.solver.factor_flops();
+                }
+            }
+            None => self.ahead.not_made(),
+        }
+        x
     }
 
     /// The stiffness of the live elements at their mid-step ages and the
@@ -810,6 +904,8 @@ impl MechanicsModel {
         b: &[f64],
         prescribed: &[f64],
         day: f64,
+        prepared: Option<Prepared>,
+        first_pass: contact_step::FirstPass,
     ) -> Result<Vec<f64>, MechError> {
         let t_joint = Instant::now();
         let step = StepSystem {
@@ -824,6 +920,8 @@ impl MechanicsModel {
             &mut self.sys,
             &mut self.state.joints,
             &self.joint_settings,
+            prepared,
+            first_pass,
         )
         .map_err(|source| MechError::Joints { day, source })?;
         self.stats.numeric += out.factorizations;
@@ -1056,6 +1154,14 @@ impl MechanicsModel {
     pub fn factor_size(&self) -> (usize, f64) {
         (self.sys.solver.factor_nnz(), self.sys.solver.factor_flops())
     }
+}
+
+/// Whether the settings let a step be factorised ahead: the active set
+/// with the capacitance correction (which takes the rows that changed
+/// since), and `solver.factor_ahead`.
+fn factor_ahead(settings: &MechanicsSettings) -> bool {
+    let j = &settings.joint;
+    settings.factor_ahead && j.capacitance && j.solver == crate::scene::ContactSolverKind::ActiveSet
 }
 
 /// The joint solver's settings for `mesh`. Gaps are compared to 1e-10 of

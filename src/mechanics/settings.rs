@@ -97,6 +97,9 @@ pub struct MechanicsSettings {
     pub ordering: OrderingKind,
     /// The solid element (`solver.element`).
     pub element: SolidElement,
+    /// Factorise each step's stiffness on the second core while the step
+    /// before runs its contact passes (`solver.factor_ahead`).
+    pub factor_ahead: bool,
 }
 
 impl MechanicsSettings {
@@ -155,6 +158,7 @@ impl MechanicsSettings {
             },
             ordering: scene.solver.ordering,
             element: scene.solver.element,
+            factor_ahead: scene.solver.factor_ahead,
         })
     }
 }

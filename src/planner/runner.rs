@@ -172,6 +172,9 @@ impl<'a> Runner<'a> {
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<Simulation<'a>, SimError> {
         let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
+        // The remedy searches run two re-simulations side by side: the
+        // second core is theirs.
+        sim.set_factor_ahead(false);
         sim.cancel = cancel;
         sim.checkpoint_every = every_days;
         sim.set_end_day(span.end_day);

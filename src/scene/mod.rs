@@ -506,6 +506,17 @@ pub struct SolverSettings {
     /// key stay what they were.
     #[serde(skip_serializing_if = "SolidElement::is_default")]
     pub element: SolidElement,
+    /// Factorise the next mechanical step's stiffness on the second core
+    /// while a step's contact passes run (active set with
+    /// `contact_capacitance`; the next step starts from that factor through
+    /// the correction): the same answer to round-off, default true. Not
+    /// written when true (restart fingerprints of older scenes).
+    #[serde(skip_serializing_if = "is_true")]
+    pub factor_ahead: bool,
+}
+
+fn is_true(v: &bool) -> bool {
+    *v
 }
 
 /// The solid element of the mechanics (`solver.element`).
@@ -583,6 +594,7 @@ impl Default for SolverSettings {
             contact_capacitance: true,
             ordering: OrderingKind::Metis,
             element: SolidElement::Hex8,
+            factor_ahead: true,
         }
     }
 }

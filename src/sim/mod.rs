@@ -15,7 +15,7 @@ use chrono::NaiveDate;
 
 use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::Mesh;
-use crate::scene::{Effect, Scene};
+use crate::scene::{Effect, Scene, TimeStepping};
 use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
 use crate::thermal::boundary::{AirTemperature, Series, Water};
 use crate::thermal::cooling::{PlannedStage, StageChange};
@@ -481,6 +481,13 @@ impl<'a> Simulation<'a> {
         };
         self.mech_steps += 1;
         let mesh = self.mesh;
+        m.set_next_step(next_mechanical_step(
+            &self.scene.time,
+            &self.timeline,
+            self.ladder,
+            t1,
+            self.timeline.end_day.t(),
+        ));
         m.step(self.mech_t0, t1, temps, level).map_err(|source| {
             let at = source
                 .pivot_dof()
@@ -500,6 +507,15 @@ impl<'a> Simulation<'a> {
                 at,
             }
         })
+    }
+
+    /// Factorise each mechanical step on the second core while the step
+    /// before runs (`solver.factor_ahead`, on by default); off where the
+    /// cores are otherwise busy. The answer is the same to round-off.
+    pub fn set_factor_ahead(&mut self, on: bool) {
+        if let Some(m) = self.mechanics.as_mut() {
+            m.set_factor_ahead(on);
+        }
     }
 
     fn record(&mut self) {
@@ -682,5 +698,40 @@ pub fn dam_layout(mesh: &Mesh) -> DamLayout {
     DamLayout {
         blocks: mesh.blocks.iter().map(|b| (b.block, b.n_lifts)).collect(),
         zones,
+    }
+}
+
+/// The interval of the mechanical step after the one ending at `t1`, from
+/// the step ladder as it stands before its growth at `t1`; None when the
+/// events of `t1` pour (a new live system) or grout (new springs), when
+/// mechanical steps may span several days, or at the end. The thermal
+/// ladder may still restart at `t1` on a cooling target reached; the step
+/// then differs and the factor made for it is discarded.
+fn next_mechanical_step(
+    time: &TimeStepping,
+    timeline: &Timeline,
+    mut ladder: Ladder,
+    t1: f64,
+    end: f64,
+) -> Option<(f64, f64)> {
+    if time.mechanics_max_step_days > 1 || t1 >= end || t1.fract() != 0.0 {
+        return None;
+    }
+    ladder.grow(time);
+    if let Some(events) = timeline.at(t1) {
+        if !events.pours.is_empty() || !events.grouting.is_empty() {
+            return None;
+        }
+        if events.stage_change {
+            ladder.restart(time, t1);
+        }
+    }
+    let mut t = t1;
+    loop {
+        t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
+        ladder.grow(time);
+        if t.fract() == 0.0 || t >= end {
+            return Some((t1, t));
+        }
     }
 }

@@ -386,6 +386,11 @@ fn print_mechanics(m: &MechStats) {
         m.capacitance.max_rank,
         m.capacitance.seconds
     );
+    let a = &m.ahead;
+    println!(
+        "{:<22} factorised ahead on the second core: {} made ({:.2} s), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
+        "", a.made, a.seconds, a.used, a.discarded, a.failed, a.seconds_waited
+    );
 }
 
 fn solver_name(kind: ThermalSolverKind) -> &'static str {

@@ -3,8 +3,10 @@
 //! creep, self-weight, friction), the whole construction solved
 //! - on the exact path: a mechanical step every midnight, refactorising at
 //!   every contact-set change (`solver.contact_capacitance = false`);
-//! - with the capacitance correction of contact-set changes (the default,
-//!   exact): the same apertures to round-off, fewer factorisations;
+//! - with the capacitance correction of contact-set changes and each
+//!   step's factor made ahead on the second core from the step before's
+//!   first guess (the defaults, exact): the same apertures to round-off,
+//!   fewer factorisations;
 //! - with mechanical steps of up to 3 days between events
 //!   (`time.mechanics_max_step_days = 3`, an opt-in approximation): fewer
 //!   steps, apertures within a measured bound.
@@ -110,6 +112,14 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
         "the contact set changes within steps"
     );
     assert!(fast_stats.capacitance.solves > 0);
+    eprintln!(
+        "factorised ahead: {} made, {} used, {} discarded",
+        fast_stats.ahead.made, fast_stats.ahead.used, fast_stats.ahead.discarded
+    );
+    assert!(
+        fast_stats.ahead.used > 0 && exact_stats.ahead.made == 0,
+        "the fast path starts steps from factors made ahead, the exact path never"
+    );
     assert!(
         fast_stats.numeric < exact_stats.numeric,
         "the correction replaces factorisations"
