@@ -22,21 +22,29 @@
 //! to round-off.
 //!
 //! When to start it is a trade measured on the demo's whole construction
-//! (`groutready study perf`): from step n's start states the factor is
-//! never waited for, but its rows differ from step n+1's guess by the
-//! changes of all of step n (16,133 correction columns against 11,602 made
-//! at the step's start); from step n's converged states the columns are
-//! back to 11,629 but the step waits 19.8 s in all; after the first pass,
-//! 13,041 columns and 6.2 s waited, the least wall time of the three. The
-//! factorisation shares the memory bus with the passes' solves, so the
-//! passes run slower beside it (joints 71.5 against 65.6 s).
+//! (`groutready study perf`, factorising ahead only steps without a pour at
+//! their start): from step n's start states the factor is never waited
+//! for, but its rows differ from step n+1's guess by the changes of all of
+//! step n (16,133 correction columns against 11,602 made at the step's
+//! start); from step n's converged states the columns are back to 11,629
+//! but the step waits 19.8 s in all; after the first pass, 13,041 columns
+//! and 6.2 s waited, the least wall time of the three. The factorisation
+//! shares the memory bus with the passes' solves, so the passes run slower
+//! beside it (joints 71.8 against 67.2 s).
+//!
+//! The K̃ and element coefficients assembled ahead are the step's own: the
+//! step reuses them ([`FactorAhead::assembled`]) when its elements were
+//! born on the days they were assembled for, rather than assemble twice.
 //!
 //! The factor is made only when the driver can name the next step
-//! ([`FactorAhead::set_next`]): no pour at its start (a new live set, a
-//! new pattern) and no zone grouted then (a zone's springs would exceed the
-//! break-even). It is used only if the next step is that interval on the
-//! same live system and its assembled K̃ equals the one factorised, bit for
-//! bit; otherwise it is discarded (counted). The main thread always waits
+//! ([`FactorAhead::set_next`]) and no zone is grouted at its start (a
+//! zone's springs would exceed the break-even). When lifts are poured at
+//! its start, the next live set is numbered and analysed ahead too
+//! ([`Births`]), its new joint pairs guessed in the state a rebuild gives
+//! them, and the rebuild after the pours adopts that system if its live
+//! elements are those. A factor is used only if the next step is that
+//! interval on that live system and its assembled K̃ equals the one
+//! factorised, bit for bit; otherwise it is discarded (counted). The main thread always waits
 //! for it, so whether it is used never depends on timing: a run stays
 //! bit-reproducible.
 //!
@@ -49,6 +57,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::fem::{CholeskySolver, SolveError, SparseSym};
+use crate::material::creep::StepCoefficients;
 
 use super::contact_step::Prepared;
 use super::joints::JointPointState;
@@ -64,6 +73,10 @@ const AHEAD_MAX_BYTES: usize = 3 << 29;
 pub struct AheadStats {
     /// factors made ahead (also counted in the numeric factorisations)
     pub made: usize,
+    /// of them, on the next step's live system numbered and analysed
+    /// ahead (lifts poured at its start)
+    #[serde(default)]
+    pub on_new_systems: usize,
     /// of them, used by their step
     pub used: usize,
     /// made for an interval or live system the next step did not have
@@ -78,33 +91,73 @@ pub struct AheadStats {
 }
 
 /// The factor being made or made for the next step, and its spare solver.
-#[derive(Debug, Default)]
+#[derive(Default)]
 pub struct FactorAhead {
     /// `solver.factor_ahead`
     enabled: bool,
-    /// the next step's interval, when the driver knows it
-    next: Option<(f64, f64)>,
+    /// the next step, when the driver knows it
+    next: Option<NextStep>,
     /// a solver on the live system's symbolic analysis, to factorise into
     spare: Option<CholeskySolver>,
     ready: Option<Made>,
     pub stats: AheadStats,
 }
 
-/// A factor made for the step over `interval`.
-#[derive(Debug)]
-struct Made {
-    interval: (f64, f64),
-    solver: CholeskySolver,
-    prepared: Prepared,
-    /// K̃ of that step, as assembled ahead
-    stiffness: SparseSym,
+/// The step after the one about to run, as the driver knows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NextStep {
+    /// (t0, t1) of that step
+    pub interval: (f64, f64),
+    /// the lifts (block, lift) poured at its start
+    pub pours: Vec<(u32, u32)>,
 }
 
-/// The next step's interval and K̃, waiting for this step's states to settle.
+/// The live system of a next step whose start pours lifts: numbered and
+/// analysed ahead, adopted by the rebuild after those pours.
+pub struct Births {
+    /// the elements live after the pours
+    pub live: Vec<bool>,
+    /// the points the pours pair, with the state each starts in
+    pub paired: Vec<(usize, JointPointState)>,
+    pub sys: LiveSystem,
+}
+
+/// The next step's K̃ and what it was assembled from: its elements'
+/// coefficients over the step and birth days, per slot of its live system.
+/// The step reuses both when its elements were born on those days
+/// ([`FactorAhead::assembled`]): the coefficients are a function of the
+/// birth day and the interval only.
+pub struct Assembled {
+    pub stiffness: SparseSym,
+    pub coeffs: Vec<StepCoefficients>,
+    pub born: Vec<f64>,
+}
+
+/// Where a factor is made: a solver on this step's live system, or the
+/// next step's own live system.
+enum Target {
+    Solver(CholeskySolver),
+    Born(Box<Births>),
+    /// the live system adopted (its solver holds the factor)
+    Adopted,
+}
+
+/// A factor made for the step over `interval`.
+struct Made {
+    interval: (f64, f64),
+    target: Target,
+    prepared: Prepared,
+    /// K̃ of that step, as assembled ahead
+    assembled: Assembled,
+}
+
+/// The next step's interval and K̃, waiting for this step's first pass.
 pub struct Order {
     interval: (f64, f64),
-    stiffness: SparseSym,
-    /// a solver to factorise into, when one is left from an earlier step
+    assembled: Assembled,
+    /// `None`: this live system (and a solver left from an earlier step,
+    /// if any); otherwise the next step's own
+    births: Option<Box<Births>>,
     spare: Option<CholeskySolver>,
 }
 
@@ -112,26 +165,39 @@ impl Order {
     /// The factorisation of the next step's first pass, guessed from this
     /// step's first-pass `states` on `live`.
     pub fn job(self, live: &LiveSystem, states: &[JointPointState]) -> Result<Job, SolveError> {
-        let prepared = Prepared::first_pass(&self.stiffness, live, states);
-        let solver = match self.spare {
-            Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
-            _ => live.solver.fork()?,
+        let (prepared, target) = match self.births {
+            None => {
+                let prepared = Prepared::first_pass(&self.assembled.stiffness, live, states);
+                let solver = match self.spare {
+                    Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
+                    _ => live.solver.fork()?,
+                };
+                (prepared, Target::Solver(solver))
+            }
+            Some(births) => {
+                let mut states = states.to_vec();
+                for &(p, st) in &births.paired {
+                    states[p] = st;
+                }
+                let prepared =
+                    Prepared::first_pass(&self.assembled.stiffness, &births.sys, &states);
+                (prepared, Target::Born(births))
+            }
         };
         Ok(Job {
-            interval: self.interval,
-            solver,
-            prepared,
-            stiffness: self.stiffness,
+            made: Made {
+                interval: self.interval,
+                target,
+                prepared,
+                assembled: self.assembled,
+            },
         })
     }
 }
 
 /// A factorisation to run on the other core.
 pub struct Job {
-    interval: (f64, f64),
-    solver: CholeskySolver,
-    prepared: Prepared,
-    stiffness: SparseSym,
+    made: Made,
 }
 
 /// A finished [`Job`].
@@ -145,23 +211,17 @@ impl Job {
     /// Spawns the factorisation on `scope`.
     pub fn spawn<'s>(self, scope: &'s Scope<'s, '_>) -> ScopedJoinHandle<'s, Done> {
         scope.spawn(move || {
-            let Job {
-                interval,
-                mut solver,
-                prepared,
-                stiffness,
-            } = self;
+            let mut made = self.made;
             let t = Instant::now();
-            let result = solver.factorize(&prepared.m);
+            let result = match &mut made.target {
+                Target::Solver(solver) => solver.factorize(&made.prepared.m),
+                Target::Born(births) => births.sys.solver.factorize(&made.prepared.m),
+                Target::Adopted => unreachable!("a job factorises into its own target"),
+            };
             Done {
                 seconds: t.elapsed().as_secs_f64(),
                 result,
-                made: Made {
-                    interval,
-                    solver,
-                    prepared,
-                    stiffness,
-                },
+                made,
             }
         })
     }
@@ -184,9 +244,9 @@ impl FactorAhead {
         }
     }
 
-    /// The interval of the step after the one about to run, or None when
-    /// its start changes the live system or grouts a zone (or is unknown).
-    pub fn set_next(&mut self, next: Option<(f64, f64)>) {
+    /// The step after the one about to run, or None when its start grouts
+    /// a zone (or it is unknown).
+    pub fn set_next(&mut self, next: Option<NextStep>) {
         self.next = next.filter(|_| self.enabled);
     }
 
@@ -199,6 +259,28 @@ impl FactorAhead {
         self.spare = None;
     }
 
+    /// The live system made ahead for the elements `live`, if one was (its
+    /// solver holds the next step's factor); None otherwise, and anything
+    /// made ahead is forgotten.
+    pub fn adopt(&mut self, live: &[bool]) -> Option<LiveSystem> {
+        let made = self.ready.as_mut();
+        if let Some(Made {
+            target: target @ Target::Born(_),
+            ..
+        }) = made
+        {
+            if matches!(target, Target::Born(b) if b.live == live) {
+                let Target::Born(births) = std::mem::replace(target, Target::Adopted) else {
+                    unreachable!("matched above")
+                };
+                self.spare = None;
+                return Some(births.sys);
+            }
+        }
+        self.forget();
+        None
+    }
+
     /// The factor made for the step over (t0, t1) with stiffness `a`, put
     /// into `live.solver` (its old factor becomes the spare), or None (then
     /// `live.solver` is untouched).
@@ -209,35 +291,82 @@ impl FactorAhead {
         live: &mut LiveSystem,
         a: &SparseSym,
     ) -> Option<Prepared> {
-        let mut made = self.ready.take()?;
-        let same_system = std::sync::Arc::ptr_eq(made.solver.pattern(), live.solver.pattern());
-        if made.interval != (t0, t1) || !same_system || made.stiffness.values() != a.values() {
+        let made = self.ready.take()?;
+        let same_system = match &made.target {
+            Target::Solver(s) => std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()),
+            Target::Adopted => true,
+            Target::Born(_) => false,
+        };
+        if made.interval != (t0, t1)
+            || !same_system
+            || made.assembled.stiffness.values() != a.values()
+        {
             self.stats.discarded += 1;
-            if same_system {
-                self.spare = Some(made.solver);
+            if let (true, Target::Solver(s)) = (same_system, made.target) {
+                self.spare = Some(s);
             }
             return None;
         }
-        std::mem::swap(&mut live.solver, &mut made.solver);
-        self.spare = Some(made.solver);
+        if let Target::Solver(mut solver) = made.target {
+            std::mem::swap(&mut live.solver, &mut solver);
+            self.spare = Some(solver);
+        }
         self.stats.used += 1;
         Some(made.prepared)
     }
 
-    /// The interval of the next step when its factorisation is due now
-    /// (once per step: it is taken).
-    pub fn due(&mut self, live: &LiveSystem) -> Option<(f64, f64)> {
-        let interval = self.next.take()?;
-        (8 * live.solver.factor_nnz() <= AHEAD_MAX_BYTES).then_some(interval)
+    /// A copy of the K̃ and coefficients made ahead for the step over
+    /// (t0, t1) on `live`, if its elements were born on the days they were
+    /// assembled for (`birth`, per element).
+    pub fn assembled(
+        &self,
+        t0: f64,
+        t1: f64,
+        live: &LiveSystem,
+        birth: &[f64],
+    ) -> Option<(SparseSym, Vec<StepCoefficients>)> {
+        let made = self.ready.as_ref()?;
+        let same_system = match &made.target {
+            Target::Solver(s) => std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()),
+            Target::Adopted => true,
+            Target::Born(_) => false,
+        };
+        let a = &made.assembled;
+        let same_births = live.elements.len() == a.born.len()
+            && live
+                .elements
+                .iter()
+                .zip(&a.born)
+                .all(|(el, &b)| birth[el.elem as usize].to_bits() == b.to_bits());
+        (made.interval == (t0, t1) && same_system && same_births)
+            .then(|| (a.stiffness.clone(), a.coeffs.clone()))
+    }
+
+    /// The next step when its factorisation is due now (once per step: it
+    /// is taken).
+    pub fn due(&mut self, live: &LiveSystem) -> Option<NextStep> {
+        let next = self.next.take()?;
+        (8 * live.solver.factor_nnz() <= AHEAD_MAX_BYTES).then_some(next)
     }
 
     /// The order for the next step's factor over `interval`, whose K̃ is
-    /// `stiffness`: the step fills it with its first pass's states.
-    pub fn order(&mut self, interval: (f64, f64), stiffness: SparseSym) -> Order {
+    /// `assembled`, on this live system or, when its start pours lifts, on
+    /// `births`: the step fills it with its first pass's states.
+    pub fn order(
+        &mut self,
+        interval: (f64, f64),
+        assembled: Assembled,
+        births: Option<Births>,
+    ) -> Order {
         Order {
             interval,
-            stiffness,
-            spare: self.spare.take(),
+            assembled,
+            spare: if births.is_none() {
+                self.spare.take()
+            } else {
+                None
+            },
+            births: births.map(Box::new),
         }
     }
 
@@ -255,12 +384,17 @@ impl FactorAhead {
         match done.result {
             Ok(()) => {
                 self.stats.made += 1;
+                if matches!(done.made.target, Target::Born(_)) {
+                    self.stats.on_new_systems += 1;
+                }
                 self.ready = Some(done.made);
                 true
             }
             Err(_) => {
                 self.stats.failed += 1;
-                self.spare = Some(done.made.solver);
+                if let Target::Solver(s) = done.made.target {
+                    self.spare = Some(s);
+                }
                 false
             }
         }

@@ -16,7 +16,7 @@ use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::scene::{OrderingKind, SolidElement};
 use crate::vocab::JointState;
 
-use super::ahead::{AheadStats, FactorAhead};
+use super::ahead::{AheadStats, Assembled, Births, FactorAhead, NextStep};
 use super::contact_step::{
     self, JointSolveSettings, JointStepError, Prepared, RefactorCounts, StepSystem,
 };
@@ -457,11 +457,10 @@ impl MechanicsModel {
         self.ahead.set_enabled(on && factor_ahead(&self.settings));
     }
 
-    /// The interval of the step after the next [`MechanicsModel::step`],
-    /// when no pour or grouting at its start changes the system (the
-    /// driver knows; None otherwise): its factorisation may then be made
-    /// while the next step runs.
-    pub fn set_next_step(&mut self, next: Option<(f64, f64)>) {
+    /// The step after the next [`MechanicsModel::step`], when no grouting
+    /// at its start changes the system (the driver knows; None otherwise):
+    /// its factorisation may then be made while the next step runs.
+    pub fn set_next_step(&mut self, next: Option<NextStep>) {
         self.ahead.set_next(next);
     }
 
@@ -477,53 +476,80 @@ impl MechanicsModel {
     }
 
     /// Numbers the live unknowns (nodes and joint pairs) and analyses the
-    /// pattern; pairs whose second node has just been born start open with
-    /// the scene's initial gap.
+    /// pattern, or adopts the live system made ahead for these elements;
+    /// pairs whose second node has just been born start open with the
+    /// scene's initial gap.
     fn rebuild(&mut self) -> Result<(), LiveError> {
-        let t = Instant::now();
-        let n_nodes = self.node_xyz.len();
-        let mut node_live = vec![false; n_nodes];
+        let pair_live = self.pair_live(&self.state.live);
+        for (p, st) in self.newly_paired(&pair_live) {
+            self.state.joints[p] = st;
+        }
+        self.sys = match self.ahead.adopt(&self.state.live) {
+            Some(sys) => sys,
+            None => {
+                let live = self.state.live.clone();
+                self.build_live(&live, &pair_live)?
+            }
+        };
+        self.dirty = false;
+        Ok(())
+    }
+
+    /// Whether each joint point is live (both its nodes in a live element)
+    /// when the elements `live` are.
+    fn pair_live(&self, live: &[bool]) -> Vec<bool> {
+        let mut node_live = vec![false; self.node_xyz.len()];
         for (e, conn) in self.elements.iter().enumerate() {
-            if self.state.live[e] {
+            if live[e] {
                 conn.iter().for_each(|&k| node_live[k as usize] = true);
             }
         }
-        let pair_live: Vec<bool> = self
-            .points
+        self.points
             .iter()
             .map(|p| node_live[p.a as usize] && node_live[p.b as usize])
-            .collect();
-        for (p, &on) in pair_live.iter().enumerate() {
-            let st = &mut self.state.joints[p];
-            if on && !st.paired {
-                // A block cast against its neighbour starts touching it: the
-                // first guess is closed (most new pairs are pressed by the
-                // fresh concrete's weight and expansion), open with a gap.
-                let gap = self.settings.joint.initial_gap_m;
-                let closed = gap == 0.0 && self.joint_settings.mu_static > 0.0;
-                *st = JointPointState {
-                    paired: true,
-                    gap,
-                    state: if closed {
-                        PointState::Stick
-                    } else {
-                        PointState::Open
-                    },
-                    ..JointPointState::UNPAIRED
-                };
-            }
-        }
+            .collect()
+    }
+
+    /// The points `pair_live` pairs that are not paired yet, with the state
+    /// each starts in.
+    fn newly_paired(&self, pair_live: &[bool]) -> Vec<(usize, JointPointState)> {
+        // A block cast against its neighbour starts touching it: the first
+        // guess is closed (most new pairs are pressed by the fresh
+        // concrete's weight and expansion), open with a gap.
+        let gap = self.settings.joint.initial_gap_m;
+        let closed = gap == 0.0 && self.joint_settings.mu_static > 0.0;
+        let start = JointPointState {
+            paired: true,
+            gap,
+            state: if closed {
+                PointState::Stick
+            } else {
+                PointState::Open
+            },
+            ..JointPointState::UNPAIRED
+        };
+        pair_live
+            .iter()
+            .enumerate()
+            .filter(|&(p, &on)| on && !self.state.joints[p].paired)
+            .map(|(p, _)| (p, start))
+            .collect()
+    }
+
+    /// Numbers and analyses the live system of the elements `live`, counted.
+    fn build_live(&mut self, live: &[bool], pair_live: &[bool]) -> Result<LiveSystem, LiveError> {
+        let t = Instant::now();
         let elements = ElementSet {
             conn: &self.elements,
-            live: &self.state.live,
+            live,
             k_unit: &self.tables.k_unit,
         };
         let sys = LiveSystem::build(
             elements,
             &self.points,
-            &pair_live,
+            pair_live,
             &self.supported,
-            n_nodes,
+            self.node_xyz.len(),
             &self.ordering,
         )?;
         self.stats.symbolic += 1;
@@ -536,10 +562,31 @@ impl MechanicsModel {
         let free = sys.supported.iter().filter(|&&s| !s).count();
         self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
-        self.sys = sys;
-        self.dirty = false;
-        self.ahead.forget();
-        Ok(())
+        Ok(sys)
+    }
+
+    /// The live system, guessed first states and K̃ of the next step, whose
+    /// start pours `next.pours`: None when the pours add no element.
+    fn births(&mut self, next: &NextStep) -> Result<Option<(Births, Assembled)>, MechError> {
+        let (t0, t1) = next.interval;
+        let mut live = self.state.live.clone();
+        let mut birth = self.state.birth_day.clone();
+        for key in &next.pours {
+            for &e in self.lift_elems.get(key).into_iter().flatten() {
+                live[e as usize] = true;
+                birth[e as usize] = t0;
+            }
+        }
+        if live == self.state.live {
+            return Ok(None);
+        }
+        let pair_live = self.pair_live(&live);
+        let paired = self.newly_paired(&pair_live);
+        let sys = self
+            .build_live(&live, &pair_live)
+            .map_err(|source| MechError::Live { day: t0, source })?;
+        let k = self.stiffness(&sys, &birth, t0, t1)?;
+        Ok(Some((Births { live, paired, sys }, k)))
     }
 
     /// Prescribes the displacement increment of a supported dof for the next
@@ -588,7 +635,17 @@ impl MechanicsModel {
     }
 
     fn coefficients(&self, e: usize, t0: f64, t1: f64) -> Result<StepCoefficients, MechError> {
-        let birth = self.state.birth_day[e];
+        self.coefficients_born(e, self.state.birth_day[e], t0, t1)
+    }
+
+    /// [`MechanicsModel::coefficients`] of element `e` born on `birth`.
+    fn coefficients_born(
+        &self,
+        e: usize,
+        birth: f64,
+        t0: f64,
+        t1: f64,
+    ) -> Result<StepCoefficients, MechError> {
         let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
         let res = if self.tables.concrete[e] {
             let concrete = &self.settings.concrete;
@@ -673,7 +730,13 @@ impl MechanicsModel {
             coeffs,
             pseudo,
             mode_loads,
-        } = self.assemble(t0, t1, temps)?;
+        } = self.assemble(
+            t0,
+            t1,
+            temps,
+            self.ahead
+                .assembled(t0, t1, &self.sys, &self.state.birth_day),
+        )?;
         let (df_ext, water) = self.external_loads(water_level)?;
         let ext = self.sys.reduce(&df_ext, &self.points);
         for i in 0..self.sys.n {
@@ -694,19 +757,34 @@ impl MechanicsModel {
         Ok(())
     }
 
-    /// The stiffness K̃ of the live elements over (t0, t1), at their
-    /// mid-step ages (the matrix of [`MechanicsModel::assemble`]).
-    fn stiffness(&self, t0: f64, t1: f64) -> Result<SparseSym, MechError> {
-        let mut a = SparseSym::new(self.sys.pattern.clone());
-        for (slot, el) in self.sys.elements.iter().enumerate() {
+    /// The stiffness K̃ of the elements of `sys` born on `birth` over
+    /// (t0, t1), at their mid-step ages, with their coefficients (what
+    /// [`MechanicsModel::assemble`] makes when they are the live ones).
+    fn stiffness(
+        &self,
+        sys: &LiveSystem,
+        birth: &[f64],
+        t0: f64,
+        t1: f64,
+    ) -> Result<Assembled, MechError> {
+        let mut a = SparseSym::new(sys.pattern.clone());
+        let mut coeffs = Vec::with_capacity(sys.elements.len());
+        let mut born = Vec::with_capacity(sys.elements.len());
+        for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
-            let c = self.coefficients(e, t0, t1)?;
+            let c = self.coefficients_born(e, birth[e], t0, t1)?;
             match &el.k_unit {
                 Some(k) => a.add_element_scaled(slot, c.e_eff, k),
                 None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
             }
+            coeffs.push(c);
+            born.push(birth[e]);
         }
-        Ok(a)
+        Ok(Assembled {
+            stiffness: a,
+            coeffs,
+            born,
+        })
     }
 
     /// The joint step from the factor made ahead for it, if any, while
@@ -722,15 +800,24 @@ impl MechanicsModel {
     ) -> Result<Vec<f64>, MechError> {
         let prepared = self.ahead.take(t0, t1, &mut self.sys, a);
         let t_asm = Instant::now();
-        // An error of the next step's stiffness is the next step's to report.
+        let symbolic_before = self.stats.seconds_symbolic;
+        // An error of the next step's system is the next step's to report.
         let order = match self.ahead.due(&self.sys) {
-            Some(next) => self
-                .stiffness(next.0, next.1)
-                .ok()
-                .map(|k| self.ahead.order(next, k)),
+            Some(next) if next.pours.is_empty() => {
+                let (t0, t1) = next.interval;
+                self.stiffness(&self.sys, &self.state.birth_day, t0, t1)
+                    .ok()
+                    .map(|k| self.ahead.order(next.interval, k, None))
+            }
+            Some(next) => match self.births(&next) {
+                Ok(Some((births, k))) => Some(self.ahead.order(next.interval, k, Some(births))),
+                _ => None,
+            },
             None => None,
         };
-        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
+        // the next live set's analysis is counted as symbolic
+        let symbolic = self.stats.seconds_symbolic - symbolic_before;
+        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64() - symbolic;
         let Some(order) = order else {
             return self.solve_joints(a, b, prescribed, t1, prepared, &mut |_, _| {});
         };
@@ -761,25 +848,37 @@ impl MechanicsModel {
 
     /// The stiffness of the live elements at their mid-step ages and the
     /// loads of the strains the step imposes.
+    /// `ahead`: the K̃ and coefficients of this step made ahead
+    /// ([`FactorAhead::assembled`]), reused as they are.
     fn assemble(
         &self,
         t0: f64,
         t1: f64,
         temps: Option<(&[f64], &[f64])>,
+        ahead: Option<(SparseSym, Vec<StepCoefficients>)>,
     ) -> Result<StepAssembly, MechError> {
         let sys = &self.sys;
-        let mut a = SparseSym::new(sys.pattern.clone());
+        let (mut a, made) = match ahead {
+            Some((a, coeffs)) => (a, Some(coeffs)),
+            None => (SparseSym::new(sys.pattern.clone()), None),
+        };
         let mut b = vec![0.0; sys.n];
         let mut coeffs = Vec::with_capacity(sys.elements.len());
         let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
         let mut mode_loads = Vec::new();
         for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
-            let c = self.coefficients(e, t0, t1)?;
-            match &el.k_unit {
-                Some(k) => a.add_element_scaled(slot, c.e_eff, k),
-                None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
-            }
+            let c = match &made {
+                Some(made) => made[slot].clone(),
+                None => {
+                    let c = self.coefficients(e, t0, t1)?;
+                    match &el.k_unit {
+                        Some(k) => a.add_element_scaled(slot, c.e_eff, k),
+                        None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
+                    }
+                    c
+                }
+            };
             let eps = self.imposed_strain(e, &c, temps);
             let imposed = eps.iter().any(|g| g.iter().any(|&v| v != 0.0));
             let modes = self.tables.modes.get(e);

@@ -13,6 +13,7 @@ pub mod timeline;
 
 use chrono::NaiveDate;
 
+use crate::mechanics::ahead::NextStep;
 use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene, TimeStepping};
@@ -701,28 +702,30 @@ pub fn dam_layout(mesh: &Mesh) -> DamLayout {
     }
 }
 
-/// The interval of the mechanical step after the one ending at `t1`, from
-/// the step ladder as it stands before its growth at `t1`; None when the
-/// events of `t1` pour (a new live system) or grout (new springs), when
-/// mechanical steps may span several days, or at the end. The thermal
-/// ladder may still restart at `t1` on a cooling target reached; the step
-/// then differs and the factor made for it is discarded.
+/// The mechanical step after the one ending at `t1`, from the step ladder
+/// as it stands before its growth at `t1`, with the lifts poured at `t1`;
+/// None when the events of `t1` grout (new springs), when mechanical steps
+/// may span several days, or at the end. The thermal ladder may still
+/// restart at `t1` on a cooling target reached; the step then differs and
+/// the factor made for it is discarded.
 fn next_mechanical_step(
     time: &TimeStepping,
     timeline: &Timeline,
     mut ladder: Ladder,
     t1: f64,
     end: f64,
-) -> Option<(f64, f64)> {
+) -> Option<NextStep> {
     if time.mechanics_max_step_days > 1 || t1 >= end || t1.fract() != 0.0 {
         return None;
     }
     ladder.grow(time);
+    let mut pours = Vec::new();
     if let Some(events) = timeline.at(t1) {
-        if !events.pours.is_empty() || !events.grouting.is_empty() {
+        if !events.grouting.is_empty() {
             return None;
         }
-        if events.stage_change {
+        pours = events.pours.iter().map(|&(b, l, _)| (b, l)).collect();
+        if events.stage_change || !pours.is_empty() {
             ladder.restart(time, t1);
         }
     }
@@ -731,7 +734,10 @@ fn next_mechanical_step(
         t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
         ladder.grow(time);
         if t.fract() == 0.0 || t >= end {
-            return Some((t1, t));
+            return Some(NextStep {
+                interval: (t1, t),
+                pours,
+            });
         }
     }
 }
