@@ -44,6 +44,11 @@ use super::joints::JointPoint;
 /// Marks a dof without an unknown.
 pub const NONE: u32 = u32::MAX;
 
+/// Live systems of this many dofs or more are factorised on both cores
+/// (faer's `Par::rayon`); smaller ones on one (on the demo's systems of up
+/// to 25,458 dofs two threads made the whole run slower: 221 against 165 s).
+pub const PARALLEL_FROM_DOFS: usize = 30_000;
+
 /// One element in the reduced unknowns.
 #[derive(Debug, Clone)]
 pub struct LiveElement {
@@ -144,7 +149,7 @@ impl LiveSystem {
         let numbered = Numbered::new(elements, points, pair_live, n_nodes)?;
         let n = numbered.n;
         let pattern = Arc::new(numbered.pattern());
-        let par = if n < 30_000 {
+        let par = if n < PARALLEL_FROM_DOFS {
             faer::Par::Seq
         } else {
             faer::Par::rayon(0)
