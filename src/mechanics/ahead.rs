@@ -127,6 +127,7 @@ pub struct Births {
 /// The step reuses both when its elements were born on those days
 /// ([`FactorAhead::assembled`]): the coefficients are a function of the
 /// birth day and the interval only.
+#[derive(Clone)]
 pub struct Assembled {
     pub stiffness: SparseSym,
     pub coeffs: Vec<StepCoefficients>,
@@ -149,6 +150,18 @@ struct Made {
     prepared: Prepared,
     /// K̃ of that step, as assembled ahead
     assembled: Assembled,
+}
+
+impl Made {
+    /// Whether it was made for the step over (t0, t1) on `live`.
+    fn is_for(&self, t0: f64, t1: f64, live: &LiveSystem) -> bool {
+        let same_system = match &self.target {
+            Target::Solver(s) => std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()),
+            Target::Adopted => true,
+            Target::Born(_) => false,
+        };
+        same_system && self.interval == (t0, t1)
+    }
 }
 
 /// The next step's interval and K̃, waiting for this step's first pass.
@@ -263,18 +276,12 @@ impl FactorAhead {
     /// solver holds the next step's factor); None otherwise, and anything
     /// made ahead is forgotten.
     pub fn adopt(&mut self, live: &[bool]) -> Option<LiveSystem> {
-        let made = self.ready.as_mut();
-        if let Some(Made {
-            target: target @ Target::Born(_),
-            ..
-        }) = made
-        {
-            if matches!(target, Target::Born(b) if b.live == live) {
-                let Target::Born(births) = std::mem::replace(target, Target::Adopted) else {
-                    unreachable!("matched above")
-                };
-                self.spare = None;
-                return Some(births.sys);
+        if let Some(made) = self.ready.as_mut() {
+            if matches!(&made.target, Target::Born(b) if b.live == live) {
+                if let Target::Born(births) = std::mem::replace(&mut made.target, Target::Adopted) {
+                    self.spare = None;
+                    return Some(births.sys);
+                }
             }
         }
         self.forget();
@@ -292,18 +299,12 @@ impl FactorAhead {
         a: &SparseSym,
     ) -> Option<Prepared> {
         let made = self.ready.take()?;
-        let same_system = match &made.target {
-            Target::Solver(s) => std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()),
-            Target::Adopted => true,
-            Target::Born(_) => false,
-        };
-        if made.interval != (t0, t1)
-            || !same_system
-            || made.assembled.stiffness.values() != a.values()
-        {
+        if !made.is_for(t0, t1, live) || made.assembled.stiffness.values() != a.values() {
             self.stats.discarded += 1;
-            if let (true, Target::Solver(s)) = (same_system, made.target) {
-                self.spare = Some(s);
+            if let Target::Solver(s) = made.target {
+                if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) {
+                    self.spare = Some(s);
+                }
             }
             return None;
         }
@@ -324,13 +325,8 @@ impl FactorAhead {
         t1: f64,
         live: &LiveSystem,
         birth: &[f64],
-    ) -> Option<(SparseSym, Vec<StepCoefficients>)> {
+    ) -> Option<Assembled> {
         let made = self.ready.as_ref()?;
-        let same_system = match &made.target {
-            Target::Solver(s) => std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()),
-            Target::Adopted => true,
-            Target::Born(_) => false,
-        };
         let a = &made.assembled;
         let same_births = live.elements.len() == a.born.len()
             && live
@@ -338,8 +334,7 @@ impl FactorAhead {
                 .iter()
                 .zip(&a.born)
                 .all(|(el, &b)| birth[el.elem as usize].to_bits() == b.to_bits());
-        (made.interval == (t0, t1) && same_system && same_births)
-            .then(|| (a.stiffness.clone(), a.coeffs.clone()))
+        (made.is_for(t0, t1, live) && same_births).then(|| a.clone())
     }
 
     /// The next step when its factorisation is due now (once per step: it

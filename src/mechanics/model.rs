@@ -634,12 +634,8 @@ impl MechanicsModel {
         n
     }
 
-    fn coefficients(&self, e: usize, t0: f64, t1: f64) -> Result<StepCoefficients, MechError> {
-        self.coefficients_born(e, self.state.birth_day[e], t0, t1)
-    }
-
-    /// [`MechanicsModel::coefficients`] of element `e` born on `birth`.
-    fn coefficients_born(
+    /// The step coefficients of element `e`, born on `birth`, over (t0, t1).
+    fn coefficients(
         &self,
         e: usize,
         birth: f64,
@@ -730,13 +726,7 @@ impl MechanicsModel {
             coeffs,
             pseudo,
             mode_loads,
-        } = self.assemble(
-            t0,
-            t1,
-            temps,
-            self.ahead
-                .assembled(t0, t1, &self.sys, &self.state.birth_day),
-        )?;
+        } = self.assemble(t0, t1, temps)?;
         let (df_ext, water) = self.external_loads(water_level)?;
         let ext = self.sys.reduce(&df_ext, &self.points);
         for i in 0..self.sys.n {
@@ -772,7 +762,7 @@ impl MechanicsModel {
         let mut born = Vec::with_capacity(sys.elements.len());
         for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
-            let c = self.coefficients_born(e, birth[e], t0, t1)?;
+            let c = self.coefficients(e, birth[e], t0, t1)?;
             match &el.k_unit {
                 Some(k) => a.add_element_scaled(slot, c.e_eff, k),
                 None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
@@ -846,40 +836,32 @@ impl MechanicsModel {
         x
     }
 
-    /// The stiffness of the live elements at their mid-step ages and the
-    /// loads of the strains the step imposes.
-    /// `ahead`: the K̃ and coefficients of this step made ahead
-    /// ([`FactorAhead::assembled`]), reused as they are.
+    /// The stiffness of the live elements at their mid-step ages (made
+    /// ahead when it was: [`FactorAhead::assembled`]) and the loads of the
+    /// strains the step imposes.
     fn assemble(
         &self,
         t0: f64,
         t1: f64,
         temps: Option<(&[f64], &[f64])>,
-        ahead: Option<(SparseSym, Vec<StepCoefficients>)>,
     ) -> Result<StepAssembly, MechError> {
         let sys = &self.sys;
-        let (mut a, made) = match ahead {
-            Some((a, coeffs)) => (a, Some(coeffs)),
-            None => (SparseSym::new(sys.pattern.clone()), None),
+        let birth = &self.state.birth_day;
+        let Assembled {
+            stiffness: a,
+            coeffs,
+            ..
+        } = match self.ahead.assembled(t0, t1, sys, birth) {
+            Some(made) => made,
+            None => self.stiffness(sys, birth, t0, t1)?,
         };
         let mut b = vec![0.0; sys.n];
-        let mut coeffs = Vec::with_capacity(sys.elements.len());
         let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
         let mut mode_loads = Vec::new();
         for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
-            let c = match &made {
-                Some(made) => made[slot].clone(),
-                None => {
-                    let c = self.coefficients(e, t0, t1)?;
-                    match &el.k_unit {
-                        Some(k) => a.add_element_scaled(slot, c.e_eff, k),
-                        None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
-                    }
-                    c
-                }
-            };
-            let eps = self.imposed_strain(e, &c, temps);
+            let c = &coeffs[slot];
+            let eps = self.imposed_strain(e, c, temps);
             let imposed = eps.iter().any(|g| g.iter().any(|&v| v != 0.0));
             let modes = self.tables.modes.get(e);
             let f_alpha = match modes {
@@ -900,7 +882,6 @@ impl MechanicsModel {
             if modes.is_some() {
                 mode_loads.push(f_alpha);
             }
-            coeffs.push(c);
             pseudo.push(eps);
         }
         Ok(StepAssembly {
