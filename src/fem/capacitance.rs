@@ -22,30 +22,47 @@
 //! [ E_Nᵀ     0       0  ] [ λ ]   [p_N]
 //! ```
 //!
-//! With U = [A[f₀,R], E_N] (m = |R| + |N| columns, zero on F₀), Z = K⁻¹U and
-//! y = K⁻¹b_f, eliminating x_f leaves the m × m capacitance system
+//! With U = [A[f₀,R], E_N] (m = |R| + |N| columns, zero on F₀) and
+//! eliminating x_f, what is left is the m × m capacitance system
 //!
 //! ```text
-//! S w = r,   S = [[A[R,R], 0], [0, 0]] − UᵀZ,   r = [b_R; p_N] − Uᵀy,
-//! x_f = y − Z w,   x_R = w_R,   x = p on F₀ ∩ F₁.
+//! S w = r,   S = [[A[R,R], 0], [0, 0]] − UᵀK⁻¹U,   r = [b_R; p_N] − UᵀK⁻¹b_f,
+//! x_f = K⁻¹(b_f − U w),   x_R = w_R,   x = p on F₀ ∩ F₁.
 //! ```
+//!
+//! The factor is M₀ = Pᵀ L Lᵀ P, so with Y = L⁻¹PU and c = L⁻¹P b_f
+//! ([`super::half_solves`]):
+//!
+//! ```text
+//! UᵀK⁻¹U = YᵀY,   UᵀK⁻¹b_f = Yᵀc,   x_f = Pᵀ L⁻ᵀ (c − Y w).
+//! ```
+//!
+//! An application is one forward and one backward half, as a plain solve;
+//! a column of Y is a forward half alone, of a vector with few entries
+//! (a unit vector, or a column of A), so it is computed on its reach in
+//! the elimination tree only: on the demo's live systems 7 % of the rows,
+//! where a column of K⁻¹U was two sweeps over the whole factor. Within a
+//! step the passes' right-hand sides differ in few rows, so the forward
+//! half of an application is the last full one plus the forward half of
+//! the difference, on its reach ([`Capacitance::solve`]).
 //!
 //! A spring added to or removed from a row free in both sets (a grout
 //! layer bonded or cracked: its stiffness sits on the diagonal of its
 //! pair's rows) changes A₀'s diagonal there by δᵢ, K by Σ δᵢ eᵢeᵢᵀ. Each
 //! such row D is bordered with μᵢ = δᵢ x_i: U gains the column e_i (the
-//! same Z column as a newly fixed row), S the diagonal entry −1/δᵢ, r a
+//! same Y column as a newly fixed row), S the diagonal entry −1/δᵢ, r a
 //! zero (eliminate x_f from K x_f + … + E_D μ = b_f and x_D − μ/δ = 0).
 //! The caller then passes the changed matrix (its diagonal the new one)
 //! and the base diagonal ([`Capacitance::with_diagonal`]); the rows
 //! released or fixed read their own entries from the changed matrix, and
-//! the off-diagonal columns U are untouched by springs, so the cached Z
+//! the off-diagonal columns U are untouched by springs, so the cached Y
 //! columns stay valid.
 //!
 //! S is symmetric quasi-definite (the Schur complement of an SPD matrix in
-//! the R block, −E_NᵀK⁻¹E_N in the N block), solved densely by LU. The
-//! columns of Z depend on the base factor only, so they are kept per dof:
-//! a later pass pays solves only for rows it has not met. The result is
+//! the R block, −E_NᵀK⁻¹E_N in the N block), solved densely by LU, once
+//! per corrected solve (its refinements reuse it). The columns of Y and
+//! their products YᵢᵀYⱼ depend on the base factor only, so they are kept:
+//! a later pass pays only for rows it has not met. The result is
 //! exact (no penalty, no tolerance); the caller checks its residual on the
 //! F₁ matrix like any solve.
 //!
@@ -54,11 +71,11 @@
 //! released and both, with prescribed values, and with springs added to and
 //! removed from free rows besides.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
-use faer::Mat;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, LU};
 
+use super::half_solves::{ReachColumn, ReachWork};
 use super::solver::{CholeskySolver, SolveError};
 use super::sparse::SparseSym;
 
@@ -134,6 +151,8 @@ pub struct Corrected {
     /// ‖b − M x‖ / ‖b‖ of the constrained system, what
     /// [`constrained_residual`] measures (see [`Capacitance::solve`])
     pub residual: f64,
+    /// ‖b − M x‖ itself
+    pub residual_norm: f64,
 }
 
 /// How a row's state differs from the base factor's.
@@ -148,8 +167,8 @@ pub enum RowChange {
 }
 
 impl RowChange {
-    /// The change whose column of Z this one uses: a diagonal change's
-    /// column is K⁻¹e_i, the same as a newly fixed row's.
+    /// The change whose column of Y this one uses: a diagonal change's
+    /// column is L⁻¹Pe_i, the same as a newly fixed row's.
     fn column_key(self) -> RowChange {
         match self {
             RowChange::Diagonal => RowChange::Fixed,
@@ -164,8 +183,25 @@ impl RowChange {
 pub struct CapacitanceStats {
     /// corrected solves
     pub solves: u64,
-    /// columns of Z computed (each a right-hand side of the base factor)
+    /// columns of Y computed (each the forward half of a solve on its reach)
     pub columns: u64,
+    /// rows of those columns (Σ of their reaches)
+    #[serde(default)]
+    pub column_rows: u64,
+    /// flops of their reach solves, as [`CholeskySolver::reach_cost`]
+    /// estimates them (the weight of a column in the break-even choice)
+    #[serde(default)]
+    pub column_flops: f64,
+    /// rows of their systems (what dense columns would hold)
+    #[serde(default)]
+    pub column_dense_rows: u64,
+    /// wall time of the columns [s] (in `seconds` too)
+    #[serde(default)]
+    pub column_seconds: f64,
+    /// forward halves of an application computed as the last full one
+    /// plus the forward half of the difference, on its reach
+    #[serde(default)]
+    pub forward_reaches: u64,
     /// largest capacitance system [changed rows]
     pub max_rank: usize,
     /// refinements on the residual
@@ -179,6 +215,11 @@ impl CapacitanceStats {
     pub fn add(&mut self, other: &CapacitanceStats) {
         self.solves += other.solves;
         self.columns += other.columns;
+        self.column_rows += other.column_rows;
+        self.column_dense_rows += other.column_dense_rows;
+        self.column_flops += other.column_flops;
+        self.forward_reaches += other.forward_reaches;
+        self.column_seconds += other.column_seconds;
         self.max_rank = self.max_rank.max(other.max_rank);
         self.refinements += other.refinements;
         self.seconds += other.seconds;
@@ -189,6 +230,11 @@ impl CapacitanceStats {
         CapacitanceStats {
             solves: self.solves - before.solves,
             columns: self.columns - before.columns,
+            column_rows: self.column_rows - before.column_rows,
+            column_dense_rows: self.column_dense_rows - before.column_dense_rows,
+            column_flops: self.column_flops - before.column_flops,
+            forward_reaches: self.forward_reaches - before.forward_reaches,
+            column_seconds: self.column_seconds - before.column_seconds,
             max_rank: self.max_rank,
             refinements: self.refinements - before.refinements,
             seconds: self.seconds - before.seconds,
@@ -196,15 +242,24 @@ impl CapacitanceStats {
     }
 }
 
-/// The base fixed set of a factor and the columns of Z met so far.
-#[derive(Debug, Clone)]
+/// The base fixed set of a factor and the columns of Y met so far.
+#[derive(Debug)]
 pub struct Capacitance {
     base: Vec<bool>,
     /// the base matrix's diagonal when the solved matrices may differ
     /// from it there ([`Capacitance::with_diagonal`])
     base_diag: Option<Vec<f64>>,
-    /// K⁻¹ U column of each changed row, by (dof, change)
-    z: BTreeMap<(u32, RowChange), Vec<f64>>,
+    /// index in `y` of the column of each changed row, by (dof, change)
+    index: BTreeMap<(u32, RowChange), u32>,
+    /// Y = L⁻¹PU, one reach column per key of `index`
+    y: Vec<ReachColumn>,
+    /// YᵢᵀYⱼ met so far, by (i, j) with i ≤ j
+    dots: HashMap<(u32, u32), f64>,
+    /// the right-hand side b_f of the last full forward half and that half
+    /// (c = L⁻¹P b_f), from which a right-hand side differing in few rows
+    /// starts
+    forward_ref: Option<(Vec<f64>, Vec<f64>)>,
+    work: ReachWork,
     pub stats: CapacitanceStats,
 }
 
@@ -214,7 +269,11 @@ impl Capacitance {
         Capacitance {
             base,
             base_diag: None,
-            z: BTreeMap::new(),
+            index: BTreeMap::new(),
+            y: Vec::new(),
+            dots: HashMap::new(),
+            forward_ref: None,
+            work: ReachWork::default(),
             stats: CapacitanceStats::default(),
         }
     }
@@ -256,25 +315,48 @@ impl Capacitance {
             .collect()
     }
 
-    /// Of `changes`, how many need a new column of Z.
-    pub fn uncached(&self, changes: &[(u32, RowChange)]) -> usize {
+    /// The keys of `changes` whose column of Y is not met yet.
+    fn new_keys(&self, changes: &[(u32, RowChange)]) -> Vec<(u32, RowChange)> {
         let mut keys: Vec<(u32, RowChange)> = changes
             .iter()
             .map(|&(dof, c)| (dof, c.column_key()))
-            .filter(|k| !self.z.contains_key(k))
+            .filter(|k| !self.index.contains_key(k))
             .collect();
         keys.dedup();
-        keys.len()
+        keys
     }
 
-    /// The cached column of Z of a change.
-    fn z_of(&self, &(dof, change): &(u32, RowChange)) -> &[f64] {
-        &self.z[&(dof, change.column_key())]
+    /// Of `changes`, how many need a new column of Y.
+    pub fn uncached(&self, changes: &[(u32, RowChange)]) -> usize {
+        self.new_keys(changes).len()
+    }
+
+    /// What the new columns of `changes` would cost on `solver`'s factor:
+    /// the flops of their reach solves and the bytes they would hold (each
+    /// estimated by the reach of its own row; a released row's column also
+    /// has entries on its neighbours, whose paths join it within a few
+    /// blocks).
+    pub fn new_columns_cost(
+        &self,
+        solver: &CholeskySolver,
+        changes: &[(u32, RowChange)],
+    ) -> (f64, usize) {
+        self.new_keys(changes)
+            .iter()
+            .map(|&(dof, _)| solver.reach_cost(dof as usize))
+            .fold((0.0, 0), |(f, b), (cf, rows)| {
+                (f + cf, b + 8 * rows as usize)
+            })
+    }
+
+    /// The column of Y of a change.
+    fn y_of(&self, &(dof, change): &(u32, RowChange)) -> u32 {
+        self.index[&(dof, change.column_key())]
     }
 
     /// Bytes held by the cached columns.
     pub fn memory_bytes(&self) -> usize {
-        self.z.values().map(|c| 8 * c.len()).sum()
+        self.y.iter().map(ReachColumn::memory_bytes).sum::<usize>() + 16 * self.dots.len()
     }
 
     /// Solves A x = rhs with the rows `fixed` held at `presc`, using
@@ -309,7 +391,8 @@ impl Capacitance {
         }
         let changes = self.changes(a, fixed);
         self.fill_columns(solver, a, &changes)?;
-        let mut x = self.apply(solver, a, &changes, fixed, presc, rhs)?;
+        let s = self.capacitance_matrix(a, &changes)?;
+        let mut x = self.apply(solver, &s, a, &changes, fixed, presc, rhs, false)?;
         let (mut r, mut norm) = free_residual(a, fixed, rhs, &x);
         let zero = vec![0.0; n];
         // four digits below the callers' residual checks (1e-8)
@@ -318,7 +401,7 @@ impl Capacitance {
             if norm <= enough {
                 break;
             }
-            let dx = self.apply(solver, a, &changes, fixed, &zero, &r)?;
+            let dx = self.apply(solver, &s, a, &changes, fixed, &zero, &r, true)?;
             let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
             let (r_next, next) = free_residual(a, fixed, rhs, &refined);
             self.stats.refinements += 1;
@@ -336,37 +419,74 @@ impl Capacitance {
         self.stats.solves += 1;
         self.stats.max_rank = self.stats.max_rank.max(changes.len());
         self.stats.seconds += t.elapsed().as_secs_f64();
-        Ok(Corrected { x, residual })
+        Ok(Corrected {
+            x,
+            residual,
+            residual_norm: norm,
+        })
     }
 
-    /// One application of the correction (the columns of `changes` filled).
+    /// One application of the correction (the columns of `changes` filled,
+    /// `s` their capacitance matrix factorised): the forward half of the
+    /// base solve, the m × m system, the backward half. A `refinement`'s
+    /// right-hand side (a residual) takes a full forward half.
+    #[allow(clippy::too_many_arguments)]
     fn apply(
-        &self,
+        &mut self,
         solver: &CholeskySolver,
+        s: &Option<LU<f64, Dyn, Dyn>>,
         a: &SparseSym,
         changes: &[(u32, RowChange)],
         fixed: &[bool],
         presc: &[f64],
         rhs: &[f64],
+        refinement: bool,
     ) -> Result<Vec<f64>, SolveError> {
         let n = a.n();
         let keep: Vec<bool> = self.base.iter().zip(fixed).map(|(&b, &f)| b && f).collect();
         let mut b = rhs.to_vec();
         a.dirichlet_correction(&keep, presc, &mut b);
-        let mut y: Vec<f64> = (0..n)
+        let b_f: Vec<f64> = (0..n)
             .map(|i| if self.base[i] { 0.0 } else { b[i] })
             .collect();
-        solver.solve_in_place(&mut y)?;
-        let w = self.capacitance_solve(a, changes, &b, presc, &y)?;
-        let mut x = y;
-        for (c, &wj) in changes.iter().zip(&w) {
+        let mut c = if refinement {
+            let mut c = b_f;
+            solver.forward_in_place(&mut c)?;
+            c
+        } else {
+            self.forward_half(solver, b_f)?
+        };
+        let w = match s {
+            Some(lu) => {
+                // r = [b_R; p_N; 0] − Uᵀy with Uᵢᵀy = Yᵢᵀc
+                let r = DVector::from_iterator(
+                    changes.len(),
+                    changes.iter().map(|ch| {
+                        let top = match ch.1 {
+                            RowChange::Released => b[ch.0 as usize],
+                            RowChange::Fixed => presc[ch.0 as usize],
+                            RowChange::Diagonal => 0.0,
+                        };
+                        top - self.y[self.y_of(ch) as usize].dot_dense(&c)
+                    }),
+                );
+                lu.solve(&r)
+                    .filter(|w| w.iter().all(|v| v.is_finite()))
+                    .ok_or(SolveError::SingularCapacitance {
+                        size: changes.len(),
+                    })?
+            }
+            None => DVector::zeros(0),
+        };
+        // x_f = Pᵀ L⁻ᵀ (c − Y w)
+        for (ch, &wj) in changes.iter().zip(w.iter()) {
             if wj != 0.0 {
-                for (xi, zi) in x.iter_mut().zip(self.z_of(c)) {
-                    *xi -= zi * wj;
-                }
+                self.y[self.y_of(ch) as usize].axpy_into(-wj, &mut c);
             }
         }
-        for (&(dof, change), &wj) in changes.iter().zip(&w) {
+        solver.backward_in_place(&mut c)?;
+        let mut x = c;
+        for (&(dof, change), &wj) in changes.iter().zip(w.iter()) {
             if change == RowChange::Released {
                 x[dof as usize] = wj;
             }
@@ -379,39 +499,71 @@ impl Capacitance {
         Ok(x)
     }
 
-    /// Computes the columns of Z not met before, in one multi-column solve.
+    /// c = L⁻¹P b_f. Within a step the passes' right-hand sides differ in
+    /// the rows of the joint points whose state or slip force changed (and
+    /// the neighbours of a released row), so c is the last full forward
+    /// half plus the forward half of the difference, on its reach, while
+    /// that reach costs less than a sweep over L (Σ of the rows' path flops
+    /// against the entries of L: the paths share their upper blocks, so the
+    /// sum overstates the cost). The difference is formed exactly in the
+    /// rows that differ, so the result is the full half's to round-off.
+    fn forward_half(
+        &mut self,
+        solver: &CholeskySolver,
+        b_f: Vec<f64>,
+    ) -> Result<Vec<f64>, SolveError> {
+        if let Some((b_ref, c_ref)) = &self.forward_ref {
+            let diff: Vec<(usize, f64)> = b_f
+                .iter()
+                .zip(b_ref)
+                .enumerate()
+                .filter(|(_, (x, r))| x != r)
+                .map(|(i, (x, r))| (i, x - r))
+                .collect();
+            let flops: f64 = diff.iter().map(|&(i, _)| solver.reach_cost(i).0).sum();
+            if flops <= solver.factor_nnz() as f64 {
+                let mut c = c_ref.clone();
+                solver
+                    .forward_reach(&diff, &mut self.work)?
+                    .axpy_into(1.0, &mut c);
+                self.stats.forward_reaches += 1;
+                return Ok(c);
+            }
+        }
+        let mut c = b_f.clone();
+        solver.forward_in_place(&mut c)?;
+        self.forward_ref = Some((b_f, c.clone()));
+        Ok(c)
+    }
+
+    /// Computes the columns of Y not met before, each on its reach.
     fn fill_columns(
         &mut self,
         solver: &CholeskySolver,
         a: &SparseSym,
         changes: &[(u32, RowChange)],
     ) -> Result<(), SolveError> {
-        let mut new: Vec<(u32, RowChange)> = changes
-            .iter()
-            .map(|&(dof, c)| (dof, c.column_key()))
-            .filter(|k| !self.z.contains_key(k))
-            .collect();
-        new.dedup();
-        if new.is_empty() {
-            return Ok(());
-        }
-        let n = a.n();
-        let mut u = Mat::<f64>::zeros(n, new.len());
-        for (k, &(dof, change)) in new.iter().enumerate() {
+        let t = std::time::Instant::now();
+        let mut entries = Vec::new();
+        for (dof, change) in self.new_keys(changes) {
+            entries.clear();
             match change {
-                RowChange::Fixed | RowChange::Diagonal => u[(dof as usize, k)] = 1.0,
+                RowChange::Fixed | RowChange::Diagonal => entries.push((dof as usize, 1.0)),
                 RowChange::Released => a.column(dof as usize, |i, v| {
                     if !self.base[i] {
-                        u[(i, k)] = v;
+                        entries.push((i, v));
                     }
                 }),
             }
+            let y = solver.forward_reach(&entries, &mut self.work)?;
+            self.index.insert((dof, change), self.y.len() as u32);
+            self.stats.column_rows += y.len() as u64;
+            self.stats.column_dense_rows += a.n() as u64;
+            self.stats.column_flops += solver.reach_cost(dof as usize).0;
+            self.y.push(y);
+            self.stats.columns += 1;
         }
-        solver.solve_columns(&mut u)?;
-        for (k, c) in new.into_iter().enumerate() {
-            self.z.insert(c, u.col(k).iter().copied().collect());
-        }
-        self.stats.columns += u.ncols() as u64;
+        self.stats.column_seconds += t.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -420,38 +572,32 @@ impl Capacitance {
         self.base_diag.as_ref().map_or(0.0, |d| a.diag_at(i) - d[i])
     }
 
-    /// Assembles and solves S w = r (see the module doc).
-    fn capacitance_solve(
-        &self,
+    /// YᵢᵀYⱼ, computed once per pair of columns.
+    fn y_dot(&mut self, i: u32, j: u32) -> f64 {
+        let key = (i.min(j), i.max(j));
+        if let Some(&d) = self.dots.get(&key) {
+            return d;
+        }
+        let d = self.y[key.0 as usize].dot(&self.y[key.1 as usize]);
+        self.dots.insert(key, d);
+        d
+    }
+
+    /// S = [[A[R,R], 0], [0, 0]] − diag(1/δ_D) − YᵀY of `changes`,
+    /// factorised by LU (`None` when nothing changed).
+    fn capacitance_matrix(
+        &mut self,
         a: &SparseSym,
         changes: &[(u32, RowChange)],
-        b: &[f64],
-        presc: &[f64],
-        y: &[f64],
-    ) -> Result<Vec<f64>, SolveError> {
+    ) -> Result<Option<LU<f64, Dyn, Dyn>>, SolveError> {
         let m = changes.len();
         if m == 0 {
-            return Ok(Vec::new());
+            return Ok(None);
         }
-        // Uᵢᵀv for the column of change i
-        let u_dot = |&(dof, change): &(u32, RowChange), v: &[f64]| -> f64 {
-            match change {
-                RowChange::Fixed | RowChange::Diagonal => v[dof as usize],
-                RowChange::Released => {
-                    let mut s = 0.0;
-                    a.column(dof as usize, |k, akr| {
-                        if !self.base[k] {
-                            s += akr * v[k];
-                        }
-                    });
-                    s
-                }
-            }
-        };
+        let cols: Vec<u32> = changes.iter().map(|c| self.y_of(c)).collect();
         let mut s = DMatrix::<f64>::zeros(m, m);
-        let mut r = DVector::<f64>::zeros(m);
         for (i, ci) in changes.iter().enumerate() {
-            for (j, cj) in changes.iter().enumerate() {
+            for (j, cj) in changes.iter().enumerate().skip(i) {
                 let arr = match (ci.1, cj.1) {
                     (RowChange::Released, RowChange::Released) => {
                         a.get(ci.0 as usize, cj.0 as usize)
@@ -461,20 +607,14 @@ impl Capacitance {
                     }
                     _ => 0.0,
                 };
-                s[(i, j)] = arr - u_dot(ci, self.z_of(cj));
+                let v = arr - self.y_dot(cols[i], cols[j]);
+                s[(i, j)] = v;
+                s[(j, i)] = v;
             }
-            let top = match ci.1 {
-                RowChange::Released => b[ci.0 as usize],
-                RowChange::Fixed => presc[ci.0 as usize],
-                RowChange::Diagonal => 0.0,
-            };
-            r[i] = top - u_dot(ci, y);
         }
-        let w = s
-            .lu()
-            .solve(&r)
-            .filter(|w| w.iter().all(|v| v.is_finite()))
-            .ok_or(SolveError::SingularCapacitance { size: m })?;
-        Ok(w.iter().copied().collect())
+        if s.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::SingularCapacitance { size: m });
+        }
+        Ok(Some(s.lu()))
     }
 }

@@ -29,6 +29,7 @@
 pub mod capacitance;
 pub mod elasticity;
 pub mod error;
+pub mod half_solves;
 pub mod hex8;
 pub mod hex8_modes;
 pub mod ordering;
@@ -41,6 +42,7 @@ pub mod thermal_kernels;
 pub use capacitance::{Capacitance, CapacitanceStats, Corrected, RowChange};
 pub use elasticity::{isotropic_d, poisson_matrix, principal_stresses, von_mises, SolidGauss};
 pub use error::ElementError;
+pub use half_solves::{ReachColumn, ReachWork};
 pub use ordering::{metis_nested_dissection, nested_dissection, MetisError, Ordering};
 pub use quadrature::{gauss_hex, gauss_legendre, gauss_quad, Rule};
 pub use solver::{relative_residual, CholeskySolver, SolveError, SolverStats};

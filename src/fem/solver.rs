@@ -17,12 +17,16 @@ use std::time::Instant;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
 use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
+use faer::sparse::linalg::triangular_solve as sparse_triangular;
+use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
+use super::half_solves::{forward_reach, BlockTree, ReachColumn, ReachWork};
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
 
@@ -75,7 +79,12 @@ pub struct SolverStats {
     pub n_rhs: u64,
     pub symbolic_seconds: f64,
     pub numeric_seconds: f64,
+    /// full solves and the halves of [`CholeskySolver::forward_in_place`]
+    /// and [`CholeskySolver::backward_in_place`] (a pair counts once)
     pub solve_seconds: f64,
+    /// forward solves on a reach ([`CholeskySolver::forward_reach`])
+    pub n_reach_columns: u64,
+    pub reach_seconds: f64,
 }
 
 /// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
@@ -84,6 +93,8 @@ pub struct CholeskySolver {
     pattern: Arc<Pattern>,
     /// shared by forks: one symbolic analysis serves several numeric factors
     symbolic: Arc<SymbolicCholesky<u32>>,
+    /// the blocks and elimination tree of `symbolic`, for reach solves
+    tree: Arc<BlockTree>,
     l_values: Vec<f64>,
     scratch: MemBuffer,
     factorized: bool,
@@ -148,6 +159,7 @@ impl CholeskySolver {
         };
         Ok(CholeskySolver {
             pattern,
+            tree: Arc::new(BlockTree::new(&symbolic)),
             symbolic: Arc::new(symbolic),
             l_values: Vec::new(),
             scratch,
@@ -169,6 +181,7 @@ impl CholeskySolver {
         Ok(CholeskySolver {
             pattern: self.pattern.clone(),
             symbolic: self.symbolic.clone(),
+            tree: self.tree.clone(),
             l_values: Vec::new(),
             scratch,
             factorized: false,
@@ -381,6 +394,149 @@ impl CholeskySolver {
     /// Solves A X = B for all columns of `rhs` at once.
     pub fn solve_columns(&self, rhs: &mut Mat<f64>) -> Result<(), SolveError> {
         self.solve_mat(rhs.as_mut())
+    }
+}
+
+/// The halves of a solve (see [`super::half_solves`]).
+impl CholeskySolver {
+    /// The row of L (permuted numbering) of each unknown.
+    fn permuted_row(&self, dof: usize) -> usize {
+        self.symbolic
+            .perm()
+            .map_or(dof, |p| p.arrays().1[dof] as usize)
+    }
+
+    /// Checks that a half solve can run on `v` (factorised, `n` rows, finite).
+    fn check_half(&self, v: &[f64], what: &'static str) -> Result<(), SolveError> {
+        if !self.factorized {
+            return Err(SolveError::NotFactorized);
+        }
+        if v.len() != self.n() {
+            return Err(SolveError::DimensionMismatch {
+                expected: self.n(),
+                got: v.len(),
+            });
+        }
+        match v.iter().position(|x| !x.is_finite()) {
+            Some(index) => Err(SolveError::NonFinite { what, index }),
+            None => Ok(()),
+        }
+    }
+
+    /// One triangle of the factor applied to `x` (permuted numbering):
+    /// L⁻¹x when `lower`, L⁻ᵀx otherwise.
+    fn triangle_solve(&self, x: &mut [f64], lower: bool) -> Result<(), SolveError> {
+        let n = x.len();
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(1, self.par))
+            .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        let stack = MemStack::new(&mut mem);
+        let rhs = MatMut::from_column_major_slice_mut(x, n, 1);
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let l = SparseColMatRef::new(s.factor(), &self.l_values);
+                if lower {
+                    sparse_triangular::solve_lower_triangular_in_place(l, Conj::No, rhs, self.par);
+                } else {
+                    sparse_triangular::solve_lower_triangular_transpose_in_place(
+                        l,
+                        Conj::No,
+                        rhs,
+                        self.par,
+                    );
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let l = SupernodalLltRef::new(s, &self.l_values);
+                if lower {
+                    l.l_solve_with_conj(Conj::No, rhs, self.par, stack);
+                } else {
+                    l.l_transpose_solve_with_conj(Conj::No, rhs, self.par, stack);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The forward half c = L⁻¹ P b: `b` on entry (the matrix's numbering),
+    /// c on exit (the factor's numbering).
+    pub fn forward_in_place(&self, b: &mut [f64]) -> Result<(), SolveError> {
+        self.check_half(b, "right-hand side")?;
+        let t = Instant::now();
+        let mut c: Vec<f64> = match self.symbolic.perm() {
+            Some(p) => p.arrays().0.iter().map(|&i| b[i as usize]).collect(),
+            None => b.to_vec(),
+        };
+        self.triangle_solve(&mut c, true)?;
+        b.copy_from_slice(&c);
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| {
+            s.n_solves += 1;
+            s.n_rhs += 1;
+            s.solve_seconds += seconds;
+        });
+        self.check_half(b, "forward solution")
+    }
+
+    /// The backward half x = Pᵀ L⁻ᵀ c: `c` on entry (the factor's
+    /// numbering), x on exit (the matrix's numbering). After
+    /// [`CholeskySolver::forward_in_place`], a solve.
+    pub fn backward_in_place(&self, c: &mut [f64]) -> Result<(), SolveError> {
+        self.check_half(c, "forward solution")?;
+        let t = Instant::now();
+        let mut y = c.to_vec();
+        self.triangle_solve(&mut y, false)?;
+        match self.symbolic.perm() {
+            Some(p) => {
+                for (k, &i) in p.arrays().0.iter().enumerate() {
+                    c[i as usize] = y[k];
+                }
+            }
+            None => c.copy_from_slice(&y),
+        }
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| s.solve_seconds += seconds);
+        self.check_half(c, "solution")
+    }
+
+    /// L⁻¹ P u for a `u` given by its entries (unknown, value), computed on
+    /// the reach of the entries only.
+    pub fn forward_reach(
+        &self,
+        entries: &[(usize, f64)],
+        work: &mut ReachWork,
+    ) -> Result<ReachColumn, SolveError> {
+        if !self.factorized {
+            return Err(SolveError::NotFactorized);
+        }
+        let n = self.n();
+        if let Some(&(i, _)) = entries.iter().find(|&&(i, v)| i >= n || !v.is_finite()) {
+            return Err(SolveError::NonFinite {
+                what: "reach right-hand side",
+                index: i,
+            });
+        }
+        let t = Instant::now();
+        let rows = entries.iter().map(|&(i, v)| (self.permuted_row(i), v));
+        let y = forward_reach(&self.symbolic, &self.l_values, &self.tree, rows, work);
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| {
+            s.n_reach_columns += 1;
+            s.reach_seconds += seconds;
+        });
+        if !y.is_finite() {
+            return Err(SolveError::NonFinite {
+                what: "reach solution",
+                index: 0,
+            });
+        }
+        Ok(y)
+    }
+
+    /// Flops and rows of the reach solve of a unit vector on `dof`: what a
+    /// capacitance column costs (a deterministic measure, compared with
+    /// [`CholeskySolver::factor_flops`]).
+    pub fn reach_cost(&self, dof: usize) -> (f64, u64) {
+        self.tree.path_of_column(self.permuted_row(dof))
     }
 }
 

@@ -575,6 +575,30 @@ impl SparseSym {
         }
     }
 
+    /// y = |A| |x| (entrywise absolute values): the size of the forces
+    /// A x sums, against which its round-off is measured.
+    pub fn abs_mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        let p = &*self.pattern;
+        assert!(
+            x.len() == p.n && y.len() == p.n,
+            "abs_mul_vec: length mismatch"
+        );
+        y.fill(0.0);
+        for j in 0..p.n {
+            let s = p.col_ptr[j] as usize;
+            let e = p.col_ptr[j + 1] as usize;
+            let xj = x[j].abs();
+            let mut acc = 0.0;
+            for k in s..e - 1 {
+                let i = p.row_idx[k] as usize;
+                let v = self.values[k].abs();
+                y[i] += v * xj;
+                acc += v * x[i].abs();
+            }
+            y[j] += acc + self.values[e - 1].abs() * xj;
+        }
+    }
+
     /// rhs_i −= Σ_{j fixed} A_ij u_j for every free i: the load of the
     /// prescribed values. Call BEFORE [`SparseSym::apply_dirichlet`]. Fixed
     /// rows of `rhs` are left alone.

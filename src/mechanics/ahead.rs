@@ -22,15 +22,19 @@
 //! to round-off.
 //!
 //! When to start it is a trade measured on the demo's whole construction
-//! (`groutready study perf`, factorising ahead only steps without a pour at
-//! their start): from step n's start states the factor is never waited
-//! for, but its rows differ from step n+1's guess by the changes of all of
-//! step n (16,133 correction columns against 11,602 made at the step's
-//! start); from step n's converged states the columns are back to 11,629
-//! but the step waits 19.8 s in all; after the first pass, 13,041 columns
-//! and 6.2 s waited, the least wall time of the three. The factorisation
-//! shares the memory bus with the passes' solves, so the passes run slower
-//! beside it (joints 71.8 against 67.2 s).
+//! (`groutready study perf`): the earlier the guess, the longer the
+//! factorisation overlaps step n's passes, and the more rows of step n+1
+//! differ from it. With the correction's columns two full sweeps each,
+//! and factorising ahead only steps without a pour at their start, the
+//! start states cost 16,133 correction columns against 11,602 made at the
+//! step's start, the converged states 11,629 columns but 19.8 s waited,
+//! the states after the first pass 13,041 columns and 6.2 s waited, the
+//! least wall time. With the columns as forward halves on their reach
+//! (about 7 % of the rows) the start states are 4 % faster (98.3–98.9 s
+//! against 100.9–104.4 s, 26 Nov 2026), but they are kept after the first
+//! pass: see [`super::contact_step::NextGuess`] for what a restart needs.
+//! The factorisation shares the memory bus with the passes' solves, so the
+//! passes run slower beside it.
 //!
 //! The K̃ and element coefficients assembled ahead are the step's own: the
 //! step reuses them ([`FactorAhead::assembled`]) when its elements were

@@ -814,12 +814,12 @@ impl MechanicsModel {
         let (x, done) = std::thread::scope(|scope| {
             let mut order = Some(order);
             let mut handle = None;
-            let mut first_pass = |live: &LiveSystem, states: &[JointPointState]| {
+            let mut next_guess = |live: &LiveSystem, states: &[JointPointState]| {
                 if let Some(job) = order.take().and_then(|o| o.job(live, states).ok()) {
                     handle = Some(job.spawn(scope));
                 }
             };
-            let x = self.solve_joints(a, b, prescribed, t1, prepared, &mut first_pass);
+            let x = self.solve_joints(a, b, prescribed, t1, prepared, &mut next_guess);
             let t = Instant::now();
             let done = handle.map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
             (x, done.map(|d| (d, t.elapsed().as_secs_f64())))
@@ -985,7 +985,7 @@ impl MechanicsModel {
         prescribed: &[f64],
         day: f64,
         prepared: Option<Prepared>,
-        first_pass: contact_step::FirstPass,
+        next_guess: contact_step::NextGuess,
     ) -> Result<Vec<f64>, MechError> {
         let t_joint = Instant::now();
         let step = StepSystem {
@@ -1001,7 +1001,7 @@ impl MechanicsModel {
             &mut self.state.joints,
             &self.joint_settings,
             prepared,
-            first_pass,
+            next_guess,
         )
         .map_err(|source| MechError::Joints { day, source })?;
         self.stats.numeric += out.factorizations;

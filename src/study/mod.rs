@@ -374,7 +374,7 @@ fn print_mechanics(m: &MechStats) {
         m.numeric_flops / 1e9
     );
     println!(
-        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined), {} columns, largest rank {}, {:.2} s",
+        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined; {} forward halves on a reach), {} columns ({:.1} % of their live sets' rows, {:.2} s, {:.1} Gflop estimated), largest rank {}, {:.2} s",
         "",
         r.step,
         r.grout,
@@ -382,7 +382,11 @@ fn print_mechanics(m: &MechStats) {
         r.rank,
         m.capacitance.solves,
         m.capacitance.refinements,
+        m.capacitance.forward_reaches,
         m.capacitance.columns,
+        100.0 * m.capacitance.column_rows as f64 / m.capacitance.column_dense_rows.max(1) as f64,
+        m.capacitance.column_seconds,
+        m.capacitance.column_flops / 1e9,
         m.capacitance.max_rank,
         m.capacitance.seconds
     );

@@ -529,10 +529,21 @@ fn nested_dissection_is_a_permutation_and_gives_the_same_solution() {
 /// round-off: rows newly fixed, rows released, and both, with prescribed
 /// values on every fixed row. A second solve whose changes it has met
 /// needs no new column.
+/// On a simplicial factor (a small grid, AMD) and a supernodal one (a
+/// larger grid, METIS), whose reach solves walk different blocks.
 #[test]
 fn capacitance_correction_equals_a_fresh_factorisation() {
+    for (size, ordering, supernodal) in [
+        ([6, 5, 4], Ordering::Amd, false),
+        ([18, 16, 14], Ordering::Metis, true),
+    ] {
+        capacitance_correction_on_grid(size, ordering, supernodal);
+    }
+}
+
+fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernodal: bool) {
     let mut rng = Rng(31);
-    let g = grid([6, 5, 4], 1.0, 0.2, true, &mut rng);
+    let g = grid(size, 1.0, 0.2, true, &mut rng);
     let n = g.n_dofs();
     let (a, _) = assemble_both(&g, 1.0, false);
     let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
@@ -541,8 +552,9 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
     let mut m0 = a.clone();
     m0.apply_dirichlet(&base);
     let mut solver =
-        CholeskySolver::with_options(a.pattern().clone(), &Ordering::Amd, faer::Par::Seq).unwrap();
+        CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
     solver.factorize(&m0).unwrap();
+    assert_eq!(solver.is_supernodal(), supernodal, "{size:?}");
     let mut cap = Capacitance::new(base.clone());
     let fix_more = |i: usize| base[i] || i % 7 == 1;
     let release = |i: usize| base[i] && !i.is_multiple_of(10);
@@ -601,6 +613,85 @@ fn capacitance_correction_equals_a_fresh_factorisation() {
                 "every change was met by the first two cases"
             );
         }
+    }
+}
+
+/// The forward half then the backward half is a solve; a reach column
+/// (the forward half of a right-hand side with few entries, computed on
+/// its reach only) equals the dense forward half of the same vector, which
+/// is exactly zero outside that reach; on a simplicial and a supernodal
+/// factor.
+#[test]
+fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
+    for (size, ordering, supernodal) in [
+        ([6, 5, 4], Ordering::Amd, false),
+        ([18, 16, 14], Ordering::Metis, true),
+    ] {
+        let mut rng = Rng(41);
+        let g = grid(size, 1.0, 0.2, true, &mut rng);
+        let n = g.n_dofs();
+        let (a, _) = assemble_both(&g, 1.0, false);
+        let mut solver =
+            CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
+        let mut work = groutready::fem::ReachWork::default();
+        assert_eq!(
+            solver.forward_reach(&[(0, 1.0)], &mut work),
+            Err(SolveError::NotFactorized)
+        );
+        solver.factorize(&a).unwrap();
+        assert_eq!(solver.is_supernodal(), supernodal, "{size:?}");
+        let b: Vec<f64> = (0..n).map(|_| rng.range(-1e5, 1e5)).collect();
+        let mut full = b.clone();
+        solver.solve_in_place(&mut full).unwrap();
+        let mut halves = b.clone();
+        solver.forward_in_place(&mut halves).unwrap();
+        solver.backward_in_place(&mut halves).unwrap();
+        let (diff, scale) = max_difference(&halves, &full);
+        assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
+        // unit vectors and a column of the matrix
+        let mut column = Vec::new();
+        a.column(n / 2, |i, v| column.push((i, v)));
+        let mut reach_rows = Vec::new();
+        for entries in [
+            vec![(0, 1.0)],
+            vec![(n - 1, -2.5)],
+            vec![(n / 3, 1.0)],
+            column,
+        ] {
+            let y = solver.forward_reach(&entries, &mut work).unwrap();
+            let mut dense = vec![0.0; n];
+            for &(i, v) in &entries {
+                dense[i] += v;
+            }
+            solver.forward_in_place(&mut dense).unwrap();
+            let reach = y.to_dense(n);
+            let (diff, scale) = max_difference(&reach, &dense);
+            assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
+            let mut inside = vec![false; n];
+            y.rows().for_each(|k| inside[k] = true);
+            let outside = (0..n).filter(|&k| !inside[k] && dense[k] != 0.0).count();
+            assert_eq!(
+                outside, 0,
+                "{size:?}: the forward half is zero outside the reach"
+            );
+            // a reach column's products are the dense ones
+            assert!(
+                (y.dot(&y) - dense.iter().map(|v| v * v).sum::<f64>()).abs() <= 1e-12 * y.dot(&y)
+            );
+            assert!((y.dot_dense(&dense) - y.dot(&y)).abs() <= 1e-12 * y.dot(&y));
+            reach_rows.push(y.len());
+        }
+        eprintln!(
+            "{size:?} (supernodal {supernodal}): {n} rows, reach columns of {reach_rows:?} rows"
+        );
+        if supernodal {
+            assert!(
+                reach_rows.iter().all(|&r| r < n / 2),
+                "a reach is a part of the factor: {reach_rows:?} of {n}"
+            );
+        }
+        let s = solver.stats();
+        assert_eq!(s.n_reach_columns, 4);
     }
 }
 

@@ -1,0 +1,306 @@
+//! The two halves of a Cholesky solve, and the first half for a right-hand
+//! side with few entries, computed on its reach in the elimination tree.
+//!
+//! faer factors M = Pᵀ L Lᵀ P (P the fill-reducing permutation), so a solve
+//! M x = b is a forward half c = L⁻¹ P b and a backward half x = Pᵀ L⁻ᵀ c.
+//! The capacitance correction ([`super::capacitance`]) needs UᵀM⁻¹U = YᵀY
+//! with Y = L⁻¹ P U, forward halves only; and a column u of U has few
+//! entries (a unit vector, or a column of the stiffness restricted to the
+//! free rows). The forward solve of such a column is non-zero only on the
+//! rows of its *reach*: the blocks on the paths from the blocks of u's
+//! entries to the root of the elimination tree (Gilbert and Peierls;
+//! T. A. Davis, *Direct Methods for Sparse Linear Systems*, SIAM 2006,
+//! §3.2 and §4.4). It is computed on those blocks alone — for a nested-
+//! dissection order a path through the separators, a small part of the
+//! factor — instead of two sweeps over all of L.
+//!
+//! A block is one of faer's supernodes (a dense column block with a common
+//! row pattern below it) or one column of a simplicial factor; both are
+//! stored column-major as the diagonal block over the rows below. Every row
+//! below a block lies in an ancestor block, and a block's parent is the
+//! block of its smallest row below, so visiting the reach in increasing
+//! order is a topological order of the forward substitution.
+//!
+//! Verified by `tests/it/fem_sparse.rs`: forward then backward equals a
+//! full solve; a reach column equals the dense forward solve of the same
+//! column, and is zero outside its reach; on simplicial and supernodal
+//! factors.
+
+use std::ops::Range;
+
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+
+/// No parent: a root of the elimination tree.
+const ROOT: u32 = u32::MAX;
+
+/// The block structure of a factor and its elimination tree, computed once
+/// per symbolic analysis.
+#[derive(Debug, Clone)]
+pub(super) struct BlockTree {
+    /// block of each column of L (the permuted numbering)
+    block_of: Vec<u32>,
+    /// parent block, [`ROOT`] at a root
+    parent: Vec<u32>,
+    /// flops of the forward solve of one column whose reach starts at the
+    /// block: the sum over the path to the root of width·(width + 2·below)
+    path_flops: Vec<f64>,
+    /// rows of that reach (Σ widths on the path)
+    path_rows: Vec<u64>,
+}
+
+/// One block of L: its first column, width, rows below and values
+/// (column-major, (width + below) × width).
+pub(super) struct Block<'a> {
+    pub start: usize,
+    pub width: usize,
+    pub below: &'a [u32],
+    pub values: &'a [f64],
+}
+
+/// The shape of block `b`: first column, width, rows below, and the range
+/// of its values in the factor's value array.
+fn block_shape(symbolic: &SymbolicCholesky<u32>, b: usize) -> (usize, usize, &[u32], Range<usize>) {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let (lo, hi) = (s.col_ptr()[b] as usize, s.col_ptr()[b + 1] as usize);
+            (b, 1, &s.row_idx()[lo + 1..hi], lo..hi)
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let start = s.supernode_begin()[b] as usize;
+            let width = s.supernode_end()[b] as usize - start;
+            let vals = s.col_ptr_for_val()[b] as usize..s.col_ptr_for_val()[b + 1] as usize;
+            (start, width, s.supernode(b).pattern(), vals)
+        }
+    }
+}
+
+/// Block `b` of a factor with its values.
+pub(super) fn block<'a>(
+    symbolic: &'a SymbolicCholesky<u32>,
+    values: &'a [f64],
+    b: usize,
+) -> Block<'a> {
+    let (start, width, below, vals) = block_shape(symbolic, b);
+    Block {
+        start,
+        width,
+        below,
+        values: &values[vals],
+    }
+}
+
+/// Number of blocks of a factor.
+fn n_blocks(symbolic: &SymbolicCholesky<u32>) -> usize {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s.nrows(),
+        SymbolicCholeskyRaw::Supernodal(s) => s.n_supernodes(),
+    }
+}
+
+impl BlockTree {
+    /// The tree of a symbolic factor (no values needed: the structure only).
+    pub(super) fn new(symbolic: &SymbolicCholesky<u32>) -> Self {
+        let n = symbolic.nrows();
+        let nb = n_blocks(symbolic);
+        let mut block_of = vec![0u32; n];
+        let mut widths = vec![(0usize, 0usize); nb];
+        for (b, w) in widths.iter_mut().enumerate() {
+            let (start, width, below, _) = block_shape(symbolic, b);
+            block_of[start..start + width].fill(b as u32);
+            *w = (width, below.len());
+        }
+        let mut parent = vec![ROOT; nb];
+        for (b, p) in parent.iter_mut().enumerate() {
+            if let Some(&first) = block_shape(symbolic, b).2.iter().min() {
+                *p = block_of[first as usize];
+            }
+        }
+        // parents come after their children: fill the paths from the roots down
+        let mut path_flops = vec![0.0; nb];
+        let mut path_rows = vec![0u64; nb];
+        for b in (0..nb).rev() {
+            let (w, below) = (widths[b].0 as f64, widths[b].1 as f64);
+            let (up_flops, up_rows) = match parent[b] {
+                ROOT => (0.0, 0),
+                p => (path_flops[p as usize], path_rows[p as usize]),
+            };
+            path_flops[b] = up_flops + w * (w + 2.0 * below);
+            path_rows[b] = up_rows + widths[b].0 as u64;
+        }
+        BlockTree {
+            block_of,
+            parent,
+            path_flops,
+            path_rows,
+        }
+    }
+
+    /// Flops and rows of the reach of one column of L (permuted numbering).
+    pub(super) fn path_of_column(&self, column: usize) -> (f64, u64) {
+        let b = self.block_of[column] as usize;
+        (self.path_flops[b], self.path_rows[b])
+    }
+
+    pub(super) fn n_blocks(&self) -> usize {
+        self.parent.len()
+    }
+}
+
+/// A column of Y = L⁻¹ P u stored on the blocks of its reach: the spans of
+/// rows (first row, length; increasing) and their values, concatenated.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReachColumn {
+    spans: Vec<(u32, u32)>,
+    values: Vec<f64>,
+}
+
+impl ReachColumn {
+    /// Rows held.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// True when every value is finite.
+    pub(super) fn is_finite(&self) -> bool {
+        self.values.iter().all(|v| v.is_finite())
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        8 * self.values.len() + 8 * self.spans.len()
+    }
+
+    /// The spans with their values.
+    fn segments(&self) -> impl Iterator<Item = (usize, &[f64])> + '_ {
+        let mut off = 0;
+        self.spans.iter().map(move |&(start, len)| {
+            let v = &self.values[off..off + len as usize];
+            off += len as usize;
+            (start as usize, v)
+        })
+    }
+
+    /// The rows held (the reach), increasing.
+    pub fn rows(&self) -> impl Iterator<Item = usize> + '_ {
+        self.spans
+            .iter()
+            .flat_map(|&(start, len)| start as usize..(start + len) as usize)
+    }
+
+    /// The column as a dense vector of `n` rows (the permuted numbering).
+    pub fn to_dense(&self, n: usize) -> Vec<f64> {
+        let mut d = vec![0.0; n];
+        for (start, v) in self.segments() {
+            d[start..start + v.len()].copy_from_slice(v);
+        }
+        d
+    }
+
+    /// yᵀz of two reach columns (of the same factor).
+    pub fn dot(&self, other: &ReachColumn) -> f64 {
+        let (mut a, mut b) = (self.segments().peekable(), other.segments().peekable());
+        let mut s = 0.0;
+        while let (Some(&(sa, va)), Some(&(sb, vb))) = (a.peek(), b.peek()) {
+            // spans are whole blocks: equal starts are the same block
+            match sa.cmp(&sb) {
+                std::cmp::Ordering::Less => {
+                    a.next();
+                }
+                std::cmp::Ordering::Greater => {
+                    b.next();
+                }
+                std::cmp::Ordering::Equal => {
+                    s += va.iter().zip(vb).map(|(x, y)| x * y).sum::<f64>();
+                    a.next();
+                    b.next();
+                }
+            }
+        }
+        s
+    }
+
+    /// yᵀc with a dense vector in the permuted numbering.
+    pub fn dot_dense(&self, c: &[f64]) -> f64 {
+        self.segments()
+            .map(|(start, v)| v.iter().zip(&c[start..]).map(|(x, y)| x * y).sum::<f64>())
+            .sum()
+    }
+
+    /// c ← c + alpha·y, c dense in the permuted numbering.
+    pub fn axpy_into(&self, alpha: f64, c: &mut [f64]) {
+        for (start, v) in self.segments() {
+            for (ci, vi) in c[start..start + v.len()].iter_mut().zip(v) {
+                *ci += alpha * vi;
+            }
+        }
+    }
+}
+
+/// Scratch of the reach solves of one factor: a dense vector kept zero
+/// between columns and the marks of the blocks visited.
+#[derive(Debug, Default)]
+pub struct ReachWork {
+    x: Vec<f64>,
+    mark: Vec<bool>,
+    reach: Vec<u32>,
+}
+
+/// L⁻¹ u for `entries` (row in the permuted numbering, value), on the reach
+/// of the entries only (see the module doc).
+pub(super) fn forward_reach(
+    symbolic: &SymbolicCholesky<u32>,
+    values: &[f64],
+    tree: &BlockTree,
+    entries: impl Iterator<Item = (usize, f64)>,
+    work: &mut ReachWork,
+) -> ReachColumn {
+    let n = symbolic.nrows();
+    if work.x.len() != n || work.mark.len() != tree.n_blocks() {
+        work.x = vec![0.0; n];
+        work.mark = vec![false; tree.n_blocks()];
+    }
+    let (x, mark, reach) = (&mut work.x, &mut work.mark, &mut work.reach);
+    reach.clear();
+    for (row, v) in entries {
+        x[row] += v;
+        let mut b = tree.block_of[row];
+        while b != ROOT && !mark[b as usize] {
+            mark[b as usize] = true;
+            reach.push(b);
+            b = tree.parent[b as usize];
+        }
+    }
+    reach.sort_unstable();
+    for &b in reach.iter() {
+        let blk = block(symbolic, values, b as usize);
+        let h = blk.width + blk.below.len();
+        for j in 0..blk.width {
+            let col = &blk.values[j * h..(j + 1) * h];
+            let xj = x[blk.start + j] / col[j];
+            x[blk.start + j] = xj;
+            if xj == 0.0 {
+                continue;
+            }
+            for (i, l) in col[j + 1..blk.width].iter().enumerate() {
+                x[blk.start + j + 1 + i] -= l * xj;
+            }
+            for (&row, l) in blk.below.iter().zip(&col[blk.width..]) {
+                x[row as usize] -= l * xj;
+            }
+        }
+    }
+    let mut out = ReachColumn::default();
+    for &b in reach.iter() {
+        let blk = block(symbolic, values, b as usize);
+        let rows = blk.start..blk.start + blk.width;
+        out.spans.push((blk.start as u32, blk.width as u32));
+        out.values.extend_from_slice(&x[rows.clone()]);
+        x[rows].fill(0.0);
+        mark[b as usize] = false;
+    }
+    out
+}
