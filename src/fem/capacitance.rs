@@ -332,20 +332,25 @@ impl Capacitance {
     }
 
     /// What the new columns of `changes` would cost on `solver`'s factor:
-    /// the flops of their reach solves and the bytes they would hold (each
-    /// estimated by the reach of its own row; a released row's column also
-    /// has entries on its neighbours, whose paths join it within a few
-    /// blocks).
+    /// the flops of their reach solves and of their products with the
+    /// other columns of S (a merge over both reaches, about twice the
+    /// rows of each, for each of the m changes), and the bytes they would
+    /// hold. Each reach is estimated by that of the column's own row (a
+    /// released row's column also has entries on its neighbours, whose
+    /// paths join it within a few blocks). The products matter when m is
+    /// large: on the Xiaowan-like arch's complete dam, thousands of
+    /// changed rows took the step to 644 s before they were counted.
     pub fn new_columns_cost(
         &self,
         solver: &CholeskySolver,
         changes: &[(u32, RowChange)],
     ) -> (f64, usize) {
+        let m = changes.len() as f64;
         self.new_keys(changes)
             .iter()
             .map(|&(dof, _)| solver.reach_cost(dof as usize))
             .fold((0.0, 0), |(f, b), (cf, rows)| {
-                (f + cf, b + 8 * rows as usize)
+                (f + cf + 2.0 * rows as f64 * m, b + 8 * rows as usize)
             })
     }
 

@@ -240,6 +240,28 @@ impl ReachColumn {
     }
 }
 
+/// Rows and entries of L in the union of the reaches of `rows` (permuted
+/// numbering): what a half solve restricted to them would read.
+pub(super) fn reach_size(
+    symbolic: &SymbolicCholesky<u32>,
+    tree: &BlockTree,
+    rows: impl Iterator<Item = usize>,
+) -> (usize, usize) {
+    let mut mark = vec![false; tree.n_blocks()];
+    let (mut n_rows, mut entries) = (0, 0);
+    for row in rows {
+        let mut b = tree.block_of[row];
+        while b != ROOT && !mark[b as usize] {
+            mark[b as usize] = true;
+            let (_, width, _, vals) = block_shape(symbolic, b as usize);
+            n_rows += width;
+            entries += vals.len();
+            b = tree.parent[b as usize];
+        }
+    }
+    (n_rows, entries)
+}
+
 /// Scratch of the reach solves of one factor: a dense vector kept zero
 /// between columns and the marks of the blocks visited.
 #[derive(Debug, Default)]

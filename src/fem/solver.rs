@@ -26,7 +26,7 @@ use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
-use super::half_solves::{forward_reach, BlockTree, ReachColumn, ReachWork};
+use super::half_solves::{forward_reach, reach_size, BlockTree, ReachColumn, ReachWork};
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
 
@@ -530,6 +530,13 @@ impl CholeskySolver {
             });
         }
         Ok(y)
+    }
+
+    /// Rows and entries of L on the union of the reaches of `dofs`: what a
+    /// half solve restricted to them would read (a measurement).
+    pub fn reach_size(&self, dofs: &[usize]) -> (usize, usize) {
+        let rows = dofs.iter().map(|&d| self.permuted_row(d));
+        reach_size(&self.symbolic, &self.tree, rows)
     }
 
     /// Flops and rows of the reach solve of a unit vector on `dof`: what a

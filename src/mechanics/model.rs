@@ -1229,6 +1229,33 @@ impl MechanicsModel {
         self.sys.n
     }
 
+    /// The rows of the live joint pairs and their neighbours, which a
+    /// contact pass reads (gaps, and reactions through K̃), and the rows and
+    /// entries of L on the union of their reaches: the part of a backward
+    /// half a pass would need before its states are known (a measurement
+    /// for `study perf`).
+    pub fn joint_rows_reach(&self) -> (usize, usize, usize) {
+        let live = &self.sys;
+        let mut pair_row = vec![false; live.n];
+        for p in &live.pairs {
+            for k in 0..3 {
+                pair_row[p.first as usize + k] = true;
+            }
+        }
+        let mut read = pair_row.clone();
+        let (cp, ri) = (live.pattern.col_ptr(), live.pattern.row_idx());
+        for j in 0..live.n {
+            for &i in &ri[cp[j] as usize..cp[j + 1] as usize] {
+                let i = i as usize;
+                read[j] |= pair_row[i];
+                read[i] |= pair_row[j];
+            }
+        }
+        let dofs: Vec<usize> = (0..live.n).filter(|&i| read[i]).collect();
+        let (rows, entries) = live.solver.reach_size(&dofs);
+        (dofs.len(), rows, entries)
+    }
+
     /// Entries of the live system's Cholesky factor and the flops of one
     /// numeric factorisation (see [`CholeskySolver::factor_flops`](crate::fem::CholeskySolver::factor_flops)).
     pub fn factor_size(&self) -> (usize, f64) {

@@ -315,6 +315,13 @@ impl Timed<'_> {
                 full.passes,
                 peak_memory_note()
             );
+            let (read, rows, entries) = full.joint_reach;
+            println!(
+                "{:<22} complete dam: a contact pass reads {read} rows (joint pairs and their neighbours); their reach in the elimination tree is {:.1} % of the rows and {:.1} % of the entries of L",
+                "",
+                100.0 * rows as f64 / full.dofs.max(1) as f64,
+                100.0 * entries as f64 / full.factor_nnz.max(1) as f64
+            );
         }
         if scene.any_thermal() {
             let full = full_dam_step_cost(scene, mesh, 10)
@@ -483,6 +490,9 @@ pub struct FullDamMechCost {
     /// entries of the factor and flops of one factorisation
     pub factor_nnz: usize,
     pub factor_flops: f64,
+    /// rows a contact pass reads (the pairs and their neighbours), and the
+    /// rows and entries of L on their reach
+    pub joint_reach: (usize, usize, usize),
 }
 
 /// Pours every lift on day 0 (no thermal field) and times the first
@@ -514,6 +524,7 @@ pub fn full_dam_mechanics_step_cost(
     Ok(FullDamMechCost {
         factor_nnz,
         factor_flops,
+        joint_reach: m.joint_rows_reach(),
         dofs: m.stats.max_dofs,
         pairs: m.state.joints.iter().filter(|j| j.paired).count(),
         symbolic_s: m.stats.seconds_symbolic,
