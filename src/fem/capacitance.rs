@@ -326,11 +326,6 @@ impl Capacitance {
         keys
     }
 
-    /// Of `changes`, how many need a new column of Y.
-    pub fn uncached(&self, changes: &[(u32, RowChange)]) -> usize {
-        self.new_keys(changes).len()
-    }
-
     /// What the new columns of `changes` would cost on `solver`'s factor:
     /// the flops of their reach solves and of their products with the
     /// other columns of S (a merge over both reaches, about twice the

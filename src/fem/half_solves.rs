@@ -144,6 +144,18 @@ impl BlockTree {
     pub(super) fn n_blocks(&self) -> usize {
         self.parent.len()
     }
+
+    /// Marks the blocks on the path from `row`'s block to the root that
+    /// are not marked yet, and appends them to `reach`: with `mark` kept
+    /// across rows, the union of their reaches.
+    fn mark_path(&self, row: usize, mark: &mut [bool], reach: &mut Vec<u32>) {
+        let mut b = self.block_of[row];
+        while b != ROOT && !mark[b as usize] {
+            mark[b as usize] = true;
+            reach.push(b);
+            b = self.parent[b as usize];
+        }
+    }
 }
 
 /// A column of Y = L⁻¹ P u stored on the blocks of its reach: the spans of
@@ -248,18 +260,14 @@ pub(super) fn reach_size(
     rows: impl Iterator<Item = usize>,
 ) -> (usize, usize) {
     let mut mark = vec![false; tree.n_blocks()];
-    let (mut n_rows, mut entries) = (0, 0);
+    let mut reach = Vec::new();
     for row in rows {
-        let mut b = tree.block_of[row];
-        while b != ROOT && !mark[b as usize] {
-            mark[b as usize] = true;
-            let (_, width, _, vals) = block_shape(symbolic, b as usize);
-            n_rows += width;
-            entries += vals.len();
-            b = tree.parent[b as usize];
-        }
+        tree.mark_path(row, &mut mark, &mut reach);
     }
-    (n_rows, entries)
+    reach.iter().fold((0, 0), |(n_rows, entries), &b| {
+        let (_, width, _, vals) = block_shape(symbolic, b as usize);
+        (n_rows + width, entries + vals.len())
+    })
 }
 
 /// Scratch of the reach solves of one factor: a dense vector kept zero
@@ -289,12 +297,7 @@ pub(super) fn forward_reach(
     reach.clear();
     for (row, v) in entries {
         x[row] += v;
-        let mut b = tree.block_of[row];
-        while b != ROOT && !mark[b as usize] {
-            mark[b as usize] = true;
-            reach.push(b);
-            b = tree.parent[b as usize];
-        }
+        tree.mark_path(row, mark, reach);
     }
     reach.sort_unstable();
     for &b in reach.iter() {
