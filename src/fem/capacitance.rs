@@ -58,9 +58,33 @@
 //! the off-diagonal columns U are untouched by springs, so the cached Y
 //! columns stay valid.
 //!
-//! S is symmetric quasi-definite (the Schur complement of an SPD matrix in
-//! the R block, −E_NᵀK⁻¹E_N in the N block), solved densely by LU, once
-//! per corrected solve (its refinements reuse it). The columns of Y and
+//! A coupling ([`Coupling`]) is a load on free rows proportional to a row
+//! of A x: a slipping joint point's friction force μ_k r_n s on its two
+//! tangential rows, r_n = (A x)_n its normal reaction. Each adds an unknown
+//! z = a_nᵀx (the whole row: fixed columns at their values, released ones
+//! in w), a column −g (its loads) to the rows and a row z − a_nᵀx = 0.
+//! Eliminating x_f as above, with Y_G = L⁻¹P g_f (g on the rows free in
+//! the base: combinations of unit columns, the same Y columns as newly
+//! fixed rows) and Y_V = L⁻¹P A[f₀, n] (the column a released row n would
+//! have), the system in (w, z) is
+//!
+//! ```text
+//! [ D − Y_UᵀY_U      Y_UᵀY_G − G_R ] [w]   [r − Y_Uᵀc         ]
+//! [ Y_VᵀY_U − V_Rᵀ   I − Y_VᵀY_G   ] [z] = [A[n, held] p + Y_Vᵀc]
+//! ```
+//!
+//! (G_R, V_R: the loads on released rows and the reaction rows' entries
+//! in released columns), and x_f = PᵀL⁻ᵀ(c − Y_U w + Y_G z). It is not
+//! symmetric; LU solves it all the same.
+//!
+//! Without couplings S is symmetric quasi-definite (the Schur complement
+//! of an SPD matrix in the R block, −E_NᵀK⁻¹E_N in the N block), solved
+//! densely by LU (faer's, blocked). Its
+//! factor is kept while the changed rows and the entries of A that S reads
+//! (A[R,R] and the diagonal changes) stay the same: the refinements and the
+//! passes that move only loads (a slip-force round) reuse it, where m³/3
+//! per pass dominated the complete Xiaowan-like dam (thousands of changed
+//! rows). The columns of Y and
 //! their products YᵢᵀYⱼ depend on the base factor only, so they are kept:
 //! a later pass pays only for rows it has not met. The result is
 //! exact (no penalty, no tolerance); the caller checks its residual on the
@@ -69,11 +93,14 @@
 //! Verified by `tests/it/fem_sparse.rs`: the corrected solution equals
 //! a fresh factorisation of the F₁ system to round-off for rows fixed,
 //! released and both, with prescribed values, and with springs added to and
-//! removed from free rows besides.
+//! removed from free rows besides; with couplings, it equals the coupled
+//! system solved by a fresh factorisation, a solve per coupling and a
+//! dense system in z (1e-12).
 
 use std::collections::{BTreeMap, HashMap};
 
-use nalgebra::{DMatrix, DVector, Dyn, LU};
+use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::Mat;
 
 use super::half_solves::{ReachColumn, ReachWork};
 use super::solver::{CholeskySolver, SolveError};
@@ -82,14 +109,28 @@ use super::sparse::SparseSym;
 /// Refinements of a corrected solution on its residual, at most.
 pub const MAX_REFINEMENTS: usize = 3;
 
-/// The residual rhs − A x on the rows not in `fixed` (zero on them) and its
-/// 2-norm.
-fn free_residual(a: &SparseSym, fixed: &[bool], rhs: &[f64], x: &[f64]) -> (Vec<f64>, f64) {
+/// The residual rhs + G (A x)_n − A x of the coupled system on the rows not
+/// in `fixed` (zero on them) and its 2-norm.
+fn free_residual(
+    a: &SparseSym,
+    fixed: &[bool],
+    rhs: &[f64],
+    couplings: &[Coupling],
+    x: &[f64],
+) -> (Vec<f64>, f64) {
     let mut ax = vec![0.0; a.n()];
     a.mul_vec(x, &mut ax);
-    let r: Vec<f64> = (0..a.n())
+    let mut r: Vec<f64> = (0..a.n())
         .map(|i| if fixed[i] { 0.0 } else { rhs[i] - ax[i] })
         .collect();
+    for c in couplings {
+        let reaction = ax[c.reaction_row as usize];
+        for &(t, coef) in &c.loads {
+            if !fixed[t as usize] {
+                r[t as usize] += coef * reaction;
+            }
+        }
+    }
     let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
     (r, norm)
 }
@@ -155,6 +196,19 @@ pub struct Corrected {
     pub residual_norm: f64,
 }
 
+/// A load proportional to a row of A x: each row `t` of `loads` (free in
+/// the solved set) carries `coef · (A x)[reaction_row]`, the whole row of A
+/// (fixed columns included). A slipping joint point is one: its friction
+/// force μ_k r_n s on its two tangential rows, with r_n its normal
+/// reaction. The coupled system is not symmetric; it is solved by the same
+/// bordered elimination (see the module doc), exactly, in one pass where a
+/// fixed point of the forces took several.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Coupling {
+    pub reaction_row: u32,
+    pub loads: Vec<(u32, f64)>,
+}
+
 /// How a row's state differs from the base factor's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum RowChange {
@@ -202,6 +256,19 @@ pub struct CapacitanceStats {
     /// plus the forward half of the difference, on its reach
     #[serde(default)]
     pub forward_reaches: u64,
+    /// LU factorisations of a capacitance system S (the others reused the
+    /// last one: same changed rows, same entries of A)
+    #[serde(default)]
+    pub s_factorisations: u64,
+    /// flops of those factorisations (m³ · 2/3 each) and their wall time
+    /// with S's assembly [s] (in `seconds` too)
+    #[serde(default)]
+    pub s_flops: f64,
+    #[serde(default)]
+    pub s_seconds: f64,
+    /// couplings bordered (Σ over the corrected solves; see [`Coupling`])
+    #[serde(default)]
+    pub couplings: u64,
     /// largest capacitance system [changed rows]
     pub max_rank: usize,
     /// refinements on the residual
@@ -220,6 +287,10 @@ impl CapacitanceStats {
         self.column_flops += other.column_flops;
         self.forward_reaches += other.forward_reaches;
         self.column_seconds += other.column_seconds;
+        self.s_factorisations += other.s_factorisations;
+        self.couplings += other.couplings;
+        self.s_flops += other.s_flops;
+        self.s_seconds += other.s_seconds;
         self.max_rank = self.max_rank.max(other.max_rank);
         self.refinements += other.refinements;
         self.seconds += other.seconds;
@@ -235,11 +306,25 @@ impl CapacitanceStats {
             column_flops: self.column_flops - before.column_flops,
             forward_reaches: self.forward_reaches - before.forward_reaches,
             column_seconds: self.column_seconds - before.column_seconds,
+            s_factorisations: self.s_factorisations - before.s_factorisations,
+            couplings: self.couplings - before.couplings,
+            s_flops: self.s_flops - before.s_flops,
+            s_seconds: self.s_seconds - before.s_seconds,
             max_rank: self.max_rank,
             refinements: self.refinements - before.refinements,
             seconds: self.seconds - before.seconds,
         }
     }
+}
+
+/// The LU of a capacitance system and what decides S: the changed rows
+/// and the entries of A it reads ([`Capacitance::s_entries`]).
+#[derive(Debug)]
+struct SFactor {
+    changes: Vec<(u32, RowChange)>,
+    couplings: Vec<Coupling>,
+    entries: Vec<f64>,
+    lu: Option<PartialPivLu<f64>>,
 }
 
 /// The base fixed set of a factor and the columns of Y met so far.
@@ -259,6 +344,8 @@ pub struct Capacitance {
     /// (c = L⁻¹P b_f), from which a right-hand side differing in few rows
     /// starts
     forward_ref: Option<(Vec<f64>, Vec<f64>)>,
+    /// the last capacitance matrix's LU and what it was built from
+    s_factor: Option<SFactor>,
     work: ReachWork,
     pub stats: CapacitanceStats,
 }
@@ -273,6 +360,7 @@ impl Capacitance {
             y: Vec::new(),
             dots: HashMap::new(),
             forward_ref: None,
+            s_factor: None,
             work: ReachWork::default(),
             stats: CapacitanceStats::default(),
         }
@@ -315,15 +403,14 @@ impl Capacitance {
             .collect()
     }
 
-    /// The keys of `changes` whose column of Y is not met yet.
-    fn new_keys(&self, changes: &[(u32, RowChange)]) -> Vec<(u32, RowChange)> {
-        let mut keys: Vec<(u32, RowChange)> = changes
-            .iter()
-            .map(|&(dof, c)| (dof, c.column_key()))
+    /// The column keys of `keys` not met yet, each once, in key order.
+    fn new_keys(
+        &self,
+        keys: impl Iterator<Item = (u32, RowChange)>,
+    ) -> std::collections::BTreeSet<(u32, RowChange)> {
+        keys.map(|(dof, c)| (dof, c.column_key()))
             .filter(|k| !self.index.contains_key(k))
-            .collect();
-        keys.dedup();
-        keys
+            .collect()
     }
 
     /// What the new columns of `changes` would cost on `solver`'s factor:
@@ -341,7 +428,7 @@ impl Capacitance {
         changes: &[(u32, RowChange)],
     ) -> (f64, usize) {
         let m = changes.len() as f64;
-        self.new_keys(changes)
+        self.new_keys(changes.iter().copied())
             .iter()
             .map(|&(dof, _)| solver.reach_cost(dof as usize))
             .fold((0.0, 0), |(f, b), (cf, rows)| {
@@ -359,20 +446,21 @@ impl Capacitance {
         self.y.iter().map(ReachColumn::memory_bytes).sum::<usize>() + 16 * self.dots.len()
     }
 
-    /// Solves A x = rhs with the rows `fixed` held at `presc`, using
-    /// `solver`, a factor of A with the base rows fixed (identity rows).
-    /// `rhs` is uncorrected: the loads of every prescribed value are
-    /// applied here. The correction loses digits when the capacitance
-    /// system is ill-conditioned (seen on the demo: 1.3e-8), so the result
-    /// is refined on the residual of the free rows until it stops improving
-    /// (at most [`MAX_REFINEMENTS`] times).
+    /// Solves A x = rhs + Σ couplings with the rows `fixed` held at
+    /// `presc`, using `solver`, a factor of A with the base rows fixed
+    /// (identity rows). `rhs` is uncorrected: the loads of every prescribed
+    /// value are applied here. A coupling's loads on fixed rows are
+    /// dropped (a held row takes no load). The correction loses digits when
+    /// the capacitance system is ill-conditioned (seen on the demo:
+    /// 1.3e-8), so the result is refined on the residual of the free rows
+    /// until it stops improving (at most [`MAX_REFINEMENTS`] times).
     ///
     /// The returned residual is the refinement's last one, relative to the
     /// constrained right-hand side: x holds `presc` exactly on the fixed
     /// rows, so rhs − A x on the free rows is b − M x there (b the
     /// constrained right-hand side, M the constrained matrix) and zero on
-    /// the fixed rows, i.e. [`constrained_residual`]'s quantity, without a
-    /// second product with A.
+    /// the fixed rows, i.e. [`constrained_residual`]'s quantity (with the
+    /// couplings' loads), without a second product with A.
     pub fn solve(
         &mut self,
         solver: &CholeskySolver,
@@ -380,6 +468,7 @@ impl Capacitance {
         fixed: &[bool],
         presc: &[f64],
         rhs: &[f64],
+        couplings: &[Coupling],
     ) -> Result<Corrected, SolveError> {
         let t = std::time::Instant::now();
         let n = a.n();
@@ -389,27 +478,47 @@ impl Capacitance {
                 got: fixed.len().min(presc.len()).min(rhs.len()),
             });
         }
-        let changes = self.changes(a, fixed);
-        self.fill_columns(solver, a, &changes)?;
-        let s = self.capacitance_matrix(a, &changes)?;
-        let mut x = self.apply(solver, &s, a, &changes, fixed, presc, rhs, false)?;
-        let (mut r, mut norm) = free_residual(a, fixed, rhs, &x);
-        let zero = vec![0.0; n];
-        // four digits below the callers' residual checks (1e-8)
-        let enough = 1e-12 * rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
-        for _ in 0..MAX_REFINEMENTS {
-            if norm <= enough {
-                break;
-            }
-            let dx = self.apply(solver, &s, a, &changes, fixed, &zero, &r, true)?;
-            let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
-            let (r_next, next) = free_residual(a, fixed, rhs, &refined);
-            self.stats.refinements += 1;
-            if next >= norm {
-                break;
-            }
-            (x, r, norm) = (refined, r_next, next);
+        if let Some(c) = couplings
+            .iter()
+            .find(|c| c.reaction_row as usize >= n || c.loads.iter().any(|&(t, _)| t as usize >= n))
+        {
+            return Err(SolveError::DimensionMismatch {
+                expected: n,
+                got: c.reaction_row as usize,
+            });
         }
+        let changes = self.changes(a, fixed);
+        let couplings: Vec<Coupling> = couplings
+            .iter()
+            .map(|c| Coupling {
+                reaction_row: c.reaction_row,
+                loads: c
+                    .loads
+                    .iter()
+                    .copied()
+                    .filter(|&(t, coef)| !fixed[t as usize] && coef != 0.0)
+                    .collect(),
+            })
+            .filter(|c| !c.loads.is_empty())
+            .collect();
+        let keys = changes
+            .iter()
+            .copied()
+            .chain(couplings.iter().flat_map(|c| {
+                let loads = c.loads.iter().filter(|&&(t, _)| !self.base[t as usize]);
+                std::iter::once((c.reaction_row, RowChange::Released))
+                    .chain(loads.map(|&(t, _)| (t, RowChange::Fixed)))
+            }));
+        let keys = self.new_keys(keys);
+        self.fill_columns(solver, a, keys)?;
+        let border = Border { changes, couplings };
+        self.factor_capacitance(a, &border)?;
+        // taken out for the applications, which borrow the columns mutably
+        let s_factor = self.s_factor.take();
+        let s = s_factor.as_ref().and_then(|f| f.lu.as_ref());
+        let solved = self.refined(solver, s, a, &border, fixed, presc, rhs);
+        self.s_factor = s_factor;
+        let (x, norm) = solved?;
         let b_norm = constrained_rhs(a, fixed, presc, rhs)
             .iter()
             .map(|v| v * v)
@@ -417,7 +526,8 @@ impl Capacitance {
             .sqrt();
         let residual = if b_norm > 0.0 { norm / b_norm } else { norm };
         self.stats.solves += 1;
-        self.stats.max_rank = self.stats.max_rank.max(changes.len());
+        self.stats.couplings += border.couplings.len() as u64;
+        self.stats.max_rank = self.stats.max_rank.max(border.changes.len());
         self.stats.seconds += t.elapsed().as_secs_f64();
         Ok(Corrected {
             x,
@@ -426,23 +536,61 @@ impl Capacitance {
         })
     }
 
-    /// One application of the correction (the columns of `changes` filled,
-    /// `s` their capacitance matrix factorised): the forward half of the
-    /// base solve, the m × m system, the backward half. A `refinement`'s
-    /// right-hand side (a residual) takes a full forward half.
+    /// One application of the correction, refined on the residual of the
+    /// free rows until it stops improving; returns x and that residual's
+    /// norm.
+    #[allow(clippy::too_many_arguments)]
+    fn refined(
+        &mut self,
+        solver: &CholeskySolver,
+        s: Option<&PartialPivLu<f64>>,
+        a: &SparseSym,
+        border: &Border,
+        fixed: &[bool],
+        presc: &[f64],
+        rhs: &[f64],
+    ) -> Result<(Vec<f64>, f64), SolveError> {
+        let n = a.n();
+        let mut x = self.apply(solver, s, a, border, fixed, presc, rhs, false)?;
+        let (mut r, mut norm) = free_residual(a, fixed, rhs, &border.couplings, &x);
+        let zero = vec![0.0; n];
+        // four digits below the callers' residual checks (1e-8)
+        let enough = 1e-12 * rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for _ in 0..MAX_REFINEMENTS {
+            if norm <= enough {
+                break;
+            }
+            let dx = self.apply(solver, s, a, border, fixed, &zero, &r, true)?;
+            let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
+            let (r_next, next) = free_residual(a, fixed, rhs, &border.couplings, &refined);
+            self.stats.refinements += 1;
+            if next >= norm {
+                break;
+            }
+            (x, r, norm) = (refined, r_next, next);
+        }
+        Ok((x, norm))
+    }
+
+    /// One application of the correction (the columns of `border` filled,
+    /// `s` its capacitance matrix factorised): the forward half of the
+    /// base solve, the (m + k) × (m + k) system, the backward half. A
+    /// `refinement`'s right-hand side (a residual) takes a full forward
+    /// half.
     #[allow(clippy::too_many_arguments)]
     fn apply(
         &mut self,
         solver: &CholeskySolver,
-        s: &Option<LU<f64, Dyn, Dyn>>,
+        s: Option<&PartialPivLu<f64>>,
         a: &SparseSym,
-        changes: &[(u32, RowChange)],
+        border: &Border,
         fixed: &[bool],
         presc: &[f64],
         rhs: &[f64],
         refinement: bool,
     ) -> Result<Vec<f64>, SolveError> {
         let n = a.n();
+        let changes = &border.changes;
         let keep: Vec<bool> = self.base.iter().zip(fixed).map(|(&b, &f)| b && f).collect();
         let mut b = rhs.to_vec();
         a.dirichlet_correction(&keep, presc, &mut b);
@@ -456,32 +604,55 @@ impl Capacitance {
         } else {
             self.forward_half(solver, b_f)?
         };
+        let size = border.size();
         let w = match s {
             Some(lu) => {
-                // r = [b_R; p_N; 0] − Uᵀy with Uᵢᵀy = Yᵢᵀc
-                let r = DVector::from_iterator(
-                    changes.len(),
-                    changes.iter().map(|ch| {
+                // r = [b_R; p_N; 0] − Uᵀy with Uᵢᵀy = Yᵢᵀc; a coupling's
+                // row: the reaction's fixed columns, Vᵀy = Y_Vᵀc
+                let mut r = Mat::from_fn(size, 1, |i, _| match changes.get(i) {
+                    Some(ch) => {
                         let top = match ch.1 {
                             RowChange::Released => b[ch.0 as usize],
                             RowChange::Fixed => presc[ch.0 as usize],
                             RowChange::Diagonal => 0.0,
                         };
                         top - self.y[self.y_of(ch) as usize].dot_dense(&c)
-                    }),
-                );
-                lu.solve(&r)
-                    .filter(|w| w.iter().all(|v| v.is_finite()))
-                    .ok_or(SolveError::SingularCapacitance {
-                        size: changes.len(),
-                    })?
+                    }
+                    None => {
+                        let row = border.couplings[i - changes.len()].reaction_row;
+                        let mut held = 0.0;
+                        a.column(row as usize, |j, v| {
+                            if keep[j] {
+                                held += v * presc[j];
+                            }
+                        });
+                        held + self.y[self.y_of(&(row, RowChange::Released)) as usize].dot_dense(&c)
+                    }
+                });
+                lu.solve_in_place(r.as_mut());
+                let w: Vec<f64> = (0..size).map(|i| r[(i, 0)]).collect();
+                if !w.iter().all(|v| v.is_finite()) {
+                    return Err(SolveError::SingularCapacitance { size });
+                }
+                w
             }
-            None => DVector::zeros(0),
+            None => Vec::new(),
         };
-        // x_f = Pᵀ L⁻ᵀ (c − Y w)
+        // x_f = Pᵀ L⁻ᵀ (c − Y_U w + Y_G z)
         for (ch, &wj) in changes.iter().zip(w.iter()) {
             if wj != 0.0 {
                 self.y[self.y_of(ch) as usize].axpy_into(-wj, &mut c);
+            }
+        }
+        for (coupling, &z) in border
+            .couplings
+            .iter()
+            .zip(&w[changes.len().min(w.len())..])
+        {
+            for &(t, coef) in &coupling.loads {
+                if !self.base[t as usize] && z != 0.0 {
+                    self.y[self.y_of(&(t, RowChange::Fixed)) as usize].axpy_into(coef * z, &mut c);
+                }
             }
         }
         solver.backward_in_place(&mut c)?;
@@ -536,16 +707,17 @@ impl Capacitance {
         Ok(c)
     }
 
-    /// Computes the columns of Y not met before, each on its reach.
+    /// Computes the columns of Y of `keys` (not met before), each on its
+    /// reach.
     fn fill_columns(
         &mut self,
         solver: &CholeskySolver,
         a: &SparseSym,
-        changes: &[(u32, RowChange)],
+        keys: std::collections::BTreeSet<(u32, RowChange)>,
     ) -> Result<(), SolveError> {
         let t = std::time::Instant::now();
         let mut entries = Vec::new();
-        for (dof, change) in self.new_keys(changes) {
+        for (dof, change) in keys {
             entries.clear();
             match change {
                 RowChange::Fixed | RowChange::Diagonal => entries.push((dof as usize, 1.0)),
@@ -583,19 +755,97 @@ impl Capacitance {
         d
     }
 
-    /// S = [[A[R,R], 0], [0, 0]] − diag(1/δ_D) − YᵀY of `changes`,
-    /// factorised by LU (`None` when nothing changed).
+    /// The entries of A that S reads besides the cached products: A[R,R]
+    /// (each released row's entries in released columns, in dof order),
+    /// δ of each diagonal change and each coupling's reaction row in the
+    /// released columns. With the changed rows and the couplings they
+    /// decide S.
+    fn s_entries(&self, a: &SparseSym, border: &Border) -> Vec<f64> {
+        let released: Vec<u32> = border
+            .changes
+            .iter()
+            .filter(|c| c.1 == RowChange::Released)
+            .map(|c| c.0)
+            .collect();
+        let mut values = Vec::new();
+        let in_released = |row: u32, values: &mut Vec<f64>| {
+            a.column(row as usize, |i, v| {
+                if released.binary_search(&(i as u32)).is_ok() {
+                    values.push(v);
+                }
+            })
+        };
+        for &(dof, change) in &border.changes {
+            match change {
+                RowChange::Released => in_released(dof, &mut values),
+                RowChange::Diagonal => values.push(self.diagonal_change(a, dof as usize)),
+                RowChange::Fixed => {}
+            }
+        }
+        for c in &border.couplings {
+            in_released(c.reaction_row, &mut values);
+        }
+        values
+    }
+
+    /// Makes `s_factor` the LU of the capacitance matrix of `border` (no
+    /// LU when it is empty), keeping the last one when S would be the same.
+    fn factor_capacitance(&mut self, a: &SparseSym, border: &Border) -> Result<(), SolveError> {
+        let entries = self.s_entries(a, border);
+        if let Some(f) = &self.s_factor {
+            if f.changes == border.changes
+                && f.couplings == border.couplings
+                && f.entries == entries
+            {
+                return Ok(());
+            }
+        }
+        self.s_factor = None;
+        let t = std::time::Instant::now();
+        // faer's blocked LU: thousands of rows on the complete large dam
+        let lu = self
+            .capacitance_matrix(a, border)?
+            .map(|s| s.partial_piv_lu());
+        let size = border.size() as f64;
+        if lu.is_some() {
+            self.stats.s_factorisations += 1;
+            self.stats.s_flops += 2.0 / 3.0 * size * size * size;
+        }
+        self.stats.s_seconds += t.elapsed().as_secs_f64();
+        self.s_factor = Some(SFactor {
+            changes: border.changes.clone(),
+            couplings: border.couplings.clone(),
+            entries,
+            lu,
+        });
+        Ok(())
+    }
+
+    /// The capacitance matrix of `border` (`None` when it is empty): with
+    /// m changes and k couplings,
+    ///
+    /// ```text
+    /// S = [ D − Y_UᵀY_U        Y_UᵀY_G − G_R ]
+    ///     [ Y_VᵀY_U − V_Rᵀ     I − Y_VᵀY_G   ]
+    /// ```
+    ///
+    /// D = [[A[R,R], 0], [0, 0]] − diag(1/δ_D); G the couplings' loads
+    /// (Y_G from the unit columns of their rows free in the base, G_R their
+    /// entries on released rows), V their reaction rows (Y_V the released
+    /// column of each, V_R its entries in released columns).
     fn capacitance_matrix(
         &mut self,
         a: &SparseSym,
-        changes: &[(u32, RowChange)],
-    ) -> Result<Option<LU<f64, Dyn, Dyn>>, SolveError> {
-        let m = changes.len();
-        if m == 0 {
+        border: &Border,
+    ) -> Result<Option<Mat<f64>>, SolveError> {
+        let (m, size) = (border.changes.len(), border.size());
+        if size == 0 {
             return Ok(None);
         }
+        let changes = &border.changes;
         let cols: Vec<u32> = changes.iter().map(|c| self.y_of(c)).collect();
-        let mut s = DMatrix::<f64>::zeros(m, m);
+        let mut s = Mat::<f64>::zeros(size, size);
+        let mut finite = true;
         for (i, ci) in changes.iter().enumerate() {
             for (j, cj) in changes.iter().enumerate().skip(i) {
                 let arr = match (ci.1, cj.1) {
@@ -608,13 +858,73 @@ impl Capacitance {
                     _ => 0.0,
                 };
                 let v = arr - self.y_dot(cols[i], cols[j]);
+                finite &= v.is_finite();
                 s[(i, j)] = v;
                 s[(j, i)] = v;
             }
         }
-        if s.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::SingularCapacitance { size: m });
+        for (q, coupling) in border.couplings.iter().enumerate() {
+            let v_col = self.y_of(&(coupling.reaction_row, RowChange::Released));
+            let loads: Vec<(u32, f64, Option<u32>)> = coupling
+                .loads
+                .iter()
+                .map(|&(t, coef)| {
+                    let col = (!self.base[t as usize]).then(|| self.y_of(&(t, RowChange::Fixed)));
+                    (t, coef, col)
+                })
+                .collect();
+            for (i, ci) in changes.iter().enumerate() {
+                // column m + q: Y_iᵀY_G − G_R
+                let mut v = 0.0;
+                for &(t, coef, col) in &loads {
+                    v += match col {
+                        Some(col) => coef * self.y_dot(cols[i], col),
+                        None if *ci == (t, RowChange::Released) => -coef,
+                        None => 0.0,
+                    };
+                }
+                s[(i, m + q)] = v;
+                // row m + q: Y_VᵀY_j − V_R
+                let held = if ci.1 == RowChange::Released {
+                    a.get(coupling.reaction_row as usize, ci.0 as usize)
+                } else {
+                    0.0
+                };
+                let v = self.y_dot(v_col, cols[i]) - held;
+                finite &= v.is_finite();
+                s[(m + q, i)] = v;
+            }
+            // block I − Y_VᵀY_G: row m + q against every coupling's loads
+            for (p, other) in border.couplings.iter().enumerate() {
+                let mut v = if p == q { 1.0 } else { 0.0 };
+                for &(t, coef) in &other.loads {
+                    if !self.base[t as usize] {
+                        let col = self.y_of(&(t, RowChange::Fixed));
+                        v -= coef * self.y_dot(v_col, col);
+                    }
+                }
+                finite &= v.is_finite();
+                s[(m + q, m + p)] = v;
+            }
         }
-        Ok(Some(s.lu()))
+        if !finite {
+            return Err(SolveError::SingularCapacitance { size });
+        }
+        Ok(Some(s))
+    }
+}
+
+/// What one corrected solve borders the base factor with: the changed rows
+/// (in dof order) and the couplings (loads on rows free in the solved set
+/// only).
+struct Border {
+    changes: Vec<(u32, RowChange)>,
+    couplings: Vec<Coupling>,
+}
+
+impl Border {
+    /// Rows of the capacitance system.
+    fn size(&self) -> usize {
+        self.changes.len() + self.couplings.len()
     }
 }

@@ -39,8 +39,16 @@
 //!   instead (the exact path it is compared with). Friction is a return mapping:
 //!   a point that slipped in the last step starts as a stick trial, slips if
 //!   its trial force exceeds μ_k·r_n (μ_s for a point at rest), in the trial
-//!   force's direction for the whole step; the slip forces μ_k·r_n(x) are a
-//!   fixed point solved by Anderson mixing (re-solves, no refactorisation).
+//!   force's direction for the whole step. The slip forces μ_k·r_n(x)·s
+//!   are linear in x for fixed directions, so a pass solves them with the
+//!   states: each slipping point's tangential rows are coupled to its
+//!   normal reaction row ([`crate::fem::Coupling`]), a non-symmetric
+//!   border of the same capacitance system (exact; on the demo's whole
+//!   construction 2,125 passes where the fixed point took 4,401). Where
+//!   the border would make S too large ([`COUPLED_S_SHARE`]), or a
+//!   point slipped in tension (its force is then μ_k·max(r_n, 0) = 0), the
+//!   slip forces are a fixed point solved by Anderson mixing (re-solves,
+//!   no refactorisation).
 //!   A point may switch open ↔ closed or slip → stick [`MAX_FLIPS`] times
 //!   per step with the others; after that it is cycling. Without friction
 //!   the cycling points switch open ↔ closed one per pass, the least index
@@ -60,7 +68,9 @@
 
 use std::time::Instant;
 
-use crate::fem::{relative_residual, Capacitance, CapacitanceStats, SolveError, SparseSym};
+use crate::fem::{
+    relative_residual, Capacitance, CapacitanceStats, Coupling, SolveError, SparseSym,
+};
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
 
@@ -88,6 +98,12 @@ const ANDERSON_DEPTH: usize = 8;
 /// 8.1 s, 3.5 Gflop/s, against 1,090 Gflop of factorisations in 55.7 s,
 /// 19.6 Gflop/s).
 const CAPACITANCE_SOLVE_WEIGHT: f64 = 5.5;
+/// Share of a numeric factorisation's flops the LU of a capacitance system
+/// with the slipping points' couplings may cost ((2/3)(m + k)³ for m
+/// changed rows and k slipping points): below it a pass solves the slip
+/// forces with the contact states (one pass where the fixed point took
+/// 3.8 on the demo), above it they are iterated.
+const COUPLED_S_SHARE: f64 = 0.1;
 /// Memory the capacitance columns of one step may hold [bytes]; above it
 /// the step refactorises.
 const CAPACITANCE_MAX_BYTES: usize = 1 << 30;
@@ -491,8 +507,17 @@ struct ActiveSet {
     /// Coulomb coefficient a stick trial is held to, per live pair: μ_k for
     /// a point that slipped in the last step, μ_s for one at rest
     limit: Vec<f64>,
-    /// friction force of each slipping point used in the current pass
+    /// friction force of each slipping point used in the current pass (of
+    /// a coupled one: the force its solution applied)
     slip_force: Vec<[f64; 2]>,
+    /// per live pair: a slipping point's friction force μ_k r_n(x) s is
+    /// solved with the pass (a [`Coupling`] of its tangential rows to its
+    /// normal reaction) rather than iterated; off for a point that slipped
+    /// in tension (its force is then held at zero, μ_k max(r_n, 0))
+    coupled: Vec<bool>,
+    /// per live pair: its slip force was coupled in the last pass
+    coupled_in_pass: Vec<bool>,
+    mu_kinetic: f64,
     /// open ↔ closed and slip → stick switches so far, per live pair
     flips: Vec<usize>,
     /// cycling points (at the flip limit) whose normal state this pass
@@ -568,6 +593,9 @@ impl ActiveSet {
                 .map(|&k| if k { s.mu_kinetic } else { s.mu_static })
                 .collect(),
             slip_force,
+            coupled: vec![s.mu_kinetic > 0.0; live.pairs.len()],
+            coupled_in_pass: vec![false; live.pairs.len()],
+            mu_kinetic: s.mu_kinetic,
             flips: vec![0usize; live.pairs.len()],
             pending: Vec::new(),
             // Least-index switching ends only without friction (see `pivot`).
@@ -602,51 +630,30 @@ impl ActiveSet {
         live: &mut LiveSystem,
         trial: &mut Trial,
     ) -> Result<Vec<f64>, JointStepError> {
-        let (old, work) = (&trial.old, &trial.work);
-        let (fixed, springs) = guess_rows(live, work);
-        let mut presc = sys.prescribed.to_vec();
-        let mut rhs = sys.b.to_vec();
-        for (q, pair) in live.pairs.iter().enumerate() {
-            let p = pair.point as usize;
-            let f = pair.first as usize;
-            let (st, r_old, g_old) = (&work[p], old[p].force, start_gap(&old[p], &work[p]));
-            match st.state {
-                PointState::Open => {
-                    for k in 0..3 {
-                        rhs[f + k] -= r_old[k];
-                    }
-                }
-                PointState::Stick => presc[f + 2] = -g_old,
-                PointState::Slip => {
-                    presc[f + 2] = -g_old;
-                    for k in 0..2 {
-                        rhs[f + k] += self.slip_force[q][k] - r_old[k];
-                    }
-                }
-                PointState::Grouted => {}
-            }
-        }
-        if self.springs.as_deref() != Some(springs.as_slice()) {
-            // the matrix of this pass: the factor's, or the one the
-            // correction solves (springs as a diagonal change)
-            self.a_cur = with_springs(sys.a, live, work);
-            self.springs = Some(springs);
-        }
-        if let Some(reason) = self.refactor_reason(live, &fixed) {
-            self.m = self.a_cur.clone();
-            self.m.apply_dirichlet(&fixed);
-            factorize(live, &self.m, &mut trial.out)?;
-            trial.out.refactor_reasons.count(reason);
-            let base_diag = self.a_cur.diag();
-            self.factored = Some((
-                self.springs.clone().unwrap_or_default(),
-                Capacitance::with_diagonal(fixed.clone(), base_diag),
-            ));
-        }
+        let (fixed, springs) = guess_rows(live, &trial.work);
+        self.factor_for(sys, live, trial, &fixed, springs)?;
+        let Some((_, cap)) = self.factored.as_ref() else {
+            unreachable!("factorised above")
+        };
+        // the slip forces with the pass while S stays small against a
+        // factorisation (else the fixed point of `next_slip_forces`)
+        let slips = (0..live.pairs.len())
+            .filter(|&q| {
+                trial.work[live.pairs[q].point as usize].state == PointState::Slip
+                    && self.coupled[q]
+                    && !live.supported[live.pairs[q].first as usize + 2]
+            })
+            .count();
+        let size = (cap.changes(&self.a_cur, &fixed).len() + slips) as f64;
+        let direct = 2.0 / 3.0 * size.powi(3) <= COUPLED_S_SHARE * live.solver.factor_flops();
+        let (presc, mut rhs, couplings) = self.pass_loads(sys, live, trial, direct);
         let Some((factored_springs, cap)) = self.factored.as_mut() else {
             unreachable!("factorised above")
         };
-        if cap.base() == fixed.as_slice() && self.springs.as_ref() == Some(factored_springs) {
+        if couplings.is_empty()
+            && cap.base() == fixed.as_slice()
+            && self.springs.as_ref() == Some(factored_springs)
+        {
             self.a_cur.dirichlet_correction(&fixed, &presc, &mut rhs);
             for i in 0..live.n {
                 if fixed[i] {
@@ -656,7 +663,7 @@ impl ActiveSet {
             return solve_checked(live, &self.m, &rhs, &mut trial.out);
         }
         let before = cap.stats;
-        let corrected = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs)?;
+        let corrected = cap.solve(&live.solver, &self.a_cur, &fixed, &presc, &rhs, &couplings)?;
         trial.out.capacitance.add(&cap.stats.since(&before));
         trial.out.solves += 1;
         // the residual on the system of this pass's rows, as a fresh factor's
@@ -668,6 +675,95 @@ impl ActiveSet {
             &fixed,
             corrected.x,
         )
+    }
+
+    /// Makes `a_cur` the matrix of a pass holding the rows `fixed` with the
+    /// grout `springs`, and refactorises when the factor cannot serve it
+    /// ([`ActiveSet::refactor_reason`]).
+    fn factor_for(
+        &mut self,
+        sys: &StepSystem,
+        live: &mut LiveSystem,
+        trial: &mut Trial,
+        fixed: &[bool],
+        springs: Vec<bool>,
+    ) -> Result<(), JointStepError> {
+        if self.springs.as_deref() != Some(springs.as_slice()) {
+            // the matrix of this pass: the factor's, or the one the
+            // correction solves (springs as a diagonal change)
+            self.a_cur = with_springs(sys.a, live, &trial.work);
+            self.springs = Some(springs);
+        }
+        if let Some(reason) = self.refactor_reason(live, fixed) {
+            self.m = self.a_cur.clone();
+            self.m.apply_dirichlet(fixed);
+            factorize(live, &self.m, &mut trial.out)?;
+            trial.out.refactor_reasons.count(reason);
+            let base_diag = self.a_cur.diag();
+            self.factored = Some((
+                self.springs.clone().unwrap_or_default(),
+                Capacitance::with_diagonal(fixed.to_vec(), base_diag),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The prescribed values, loads and couplings of the guessed states: a
+    /// closed point's gap closes (x_n = −g_old), an open one sheds its old
+    /// force, a slipping one carries its friction force, `direct`ly as a
+    /// coupling to its normal reaction where [`ActiveSet::coupled`] allows,
+    /// else the force of the fixed point's current iterate.
+    fn pass_loads(
+        &mut self,
+        sys: &StepSystem,
+        live: &LiveSystem,
+        trial: &Trial,
+        direct: bool,
+    ) -> (Vec<f64>, Vec<f64>, Vec<Coupling>) {
+        let (old, work) = (&trial.old, &trial.work);
+        let mut presc = sys.prescribed.to_vec();
+        let mut rhs = sys.b.to_vec();
+        let mut couplings = Vec::new();
+        self.coupled_in_pass.fill(false);
+        for (q, pair) in live.pairs.iter().enumerate() {
+            let p = pair.point as usize;
+            let f = pair.first as usize;
+            let (st, r_old, g_old) = (&work[p], old[p].force, start_gap(&old[p], &work[p]));
+            match st.state {
+                PointState::Open => {
+                    for k in 0..3 {
+                        rhs[f + k] -= r_old[k];
+                    }
+                }
+                PointState::Stick => presc[f + 2] = -g_old,
+                PointState::Slip if direct && self.coupled[q] && !live.supported[f + 2] => {
+                    presc[f + 2] = -g_old;
+                    // μ_k s r_n with r_n = r_old_n + (K̃x)_n − b_n: the
+                    // constant part here, (K̃x)_n through the coupling
+                    let mu = self.mu_kinetic;
+                    let held = mu * (r_old[2] - sys.b[f + 2]);
+                    for k in 0..2 {
+                        rhs[f + k] += held * st.slip_dir[k] - r_old[k];
+                    }
+                    self.coupled_in_pass[q] = true;
+                    couplings.push(Coupling {
+                        reaction_row: (f + 2) as u32,
+                        loads: vec![
+                            (f as u32, mu * st.slip_dir[0]),
+                            ((f + 1) as u32, mu * st.slip_dir[1]),
+                        ],
+                    });
+                }
+                PointState::Slip => {
+                    presc[f + 2] = -g_old;
+                    for k in 0..2 {
+                        rhs[f + k] += self.slip_force[q][k] - r_old[k];
+                    }
+                }
+                PointState::Grouted => {}
+            }
+        }
+        (presc, rhs, couplings)
     }
 
     /// Why the factor in `live` cannot serve the guess with rows `fixed`
@@ -843,6 +939,11 @@ impl ActiveSet {
         s: &JointSolveSettings,
         outcome: &mut PassOutcome,
     ) {
+        if self.coupled_in_pass[q] {
+            // the force the pass applied: μ_k r_n s of its own solution
+            let mag = s.mu_kinetic * reaction[2];
+            self.slip_force[q] = [mag * st.slip_dir[0], mag * st.slip_dir[1]];
+        }
         let slip_force = self.slip_force[q];
         st.force = [slip_force[0], slip_force[1], reaction[2]];
         st.gap = 0.0;
@@ -854,6 +955,12 @@ impl ActiveSet {
             0.0
         };
         let tension = reaction[2] < -self.tol_f;
+        if reaction[2] < 0.0 && self.coupled_in_pass[q] {
+            // no friction force in tension: held at μ_k max(r_n, 0) = 0
+            // by the fixed point from here on
+            self.coupled[q] = false;
+            outcome.changes += 1;
+        }
         if tension && self.flips[q] >= MAX_FLIPS {
             self.pending.push(q);
         }

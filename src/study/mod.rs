@@ -305,21 +305,22 @@ impl Timed<'_> {
             println!(
                 "{:<22} complete dam mechanics: {} dofs ({} joint pairs), factor {:.1}M entries, {:.2} Gflop; symbolic {:.2} s, step {:.2} s ({} numeric factorisations, {} contact passes){}",
                 "",
-                full.dofs,
+                full.stats.max_dofs,
                 full.pairs,
                 full.factor_nnz as f64 / 1e6,
                 full.factor_flops / 1e9,
-                full.symbolic_s,
+                full.stats.seconds_symbolic,
                 full.step_s,
-                full.numeric,
-                full.passes,
+                full.stats.numeric,
+                full.stats.contact_iterations,
                 peak_memory_note()
             );
+            print_mechanics(&full.stats);
             let (read, rows, entries) = full.joint_reach;
             println!(
                 "{:<22} complete dam: a contact pass reads {read} rows (joint pairs and their neighbours); their reach in the elimination tree is {:.1} % of the rows and {:.1} % of the entries of L",
                 "",
-                100.0 * rows as f64 / full.dofs.max(1) as f64,
+                100.0 * rows as f64 / full.stats.max_dofs.max(1) as f64,
                 100.0 * entries as f64 / full.factor_nnz.max(1) as f64
             );
         }
@@ -381,7 +382,7 @@ fn print_mechanics(m: &MechStats) {
         m.numeric_flops / 1e9
     );
     println!(
-        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined; {} forward halves on a reach), {} columns ({:.1} % of their live sets' rows, {:.2} s, {:.1} Gflop estimated), largest rank {}, {:.2} s",
+        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined; {} forward halves on a reach), {} columns ({:.1} % of their live sets' rows, {:.2} s, {:.1} Gflop estimated), {} LU of S ({:.1} Gflop, {:.2} s with its assembly), largest rank {}, {:.2} s",
         "",
         r.step,
         r.grout,
@@ -394,6 +395,9 @@ fn print_mechanics(m: &MechStats) {
         100.0 * m.capacitance.column_rows as f64 / m.capacitance.column_dense_rows.max(1) as f64,
         m.capacitance.column_seconds,
         m.capacitance.column_flops / 1e9,
+        m.capacitance.s_factorisations,
+        m.capacitance.s_flops / 1e9,
+        m.capacitance.s_seconds,
         m.capacitance.max_rank,
         m.capacitance.seconds
     );
@@ -481,12 +485,10 @@ pub const COMPLETE_STEP_MAX_PASSES: usize = 300;
 /// Cost of one mechanical step of the complete dam.
 #[derive(Debug, Clone, Copy)]
 pub struct FullDamMechCost {
-    pub dofs: usize,
     pub pairs: usize,
-    pub symbolic_s: f64,
     pub step_s: f64,
-    pub numeric: usize,
-    pub passes: usize,
+    /// the model's counters over the step
+    pub stats: MechStats,
     /// entries of the factor and flops of one factorisation
     pub factor_nnz: usize,
     pub factor_flops: f64,
@@ -525,12 +527,9 @@ pub fn full_dam_mechanics_step_cost(
         factor_nnz,
         factor_flops,
         joint_reach: m.joint_rows_reach(),
-        dofs: m.stats.max_dofs,
         pairs: m.state.joints.iter().filter(|j| j.paired).count(),
-        symbolic_s: m.stats.seconds_symbolic,
         step_s,
-        numeric: m.stats.numeric,
-        passes: m.stats.contact_iterations,
+        stats: m.stats,
     })
 }
 

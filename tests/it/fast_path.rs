@@ -107,7 +107,9 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
         1e3 * largest
     );
     assert_eq!(differ, 0);
-    assert_eq!(exact_stats.capacitance.solves, 0);
+    // the exact path borders only slipping points' couplings on its
+    // factors, never a changed row
+    assert_eq!(exact_stats.capacitance.max_rank, 0);
     assert!(
         exact_stats.refactor_reasons.contact > 0,
         "the contact set changes within steps"

@@ -13,8 +13,8 @@ use std::time::Instant;
 use faer::Mat;
 use groutready::fem::{
     capacity_consistent, capacity_lumped, conductivity, face_convection, hex8, nested_dissection,
-    relative_residual, volume_load, Capacitance, CholeskySolver, Ordering, Pattern, PatternError,
-    SolveError, SparseSym, NO_DOF,
+    relative_residual, volume_load, Capacitance, CholeskySolver, Coupling, Ordering, Pattern,
+    PatternError, SolveError, SparseSym, NO_DOF,
 };
 use nalgebra::{DMatrix, DVector, SMatrix};
 
@@ -572,7 +572,7 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
         m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
         let x_ref = fresh_solution(&m1, &rhs1);
         let columns = cap.stats.columns;
-        let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs).unwrap();
+        let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs, &[]).unwrap();
         let x = corrected.x;
         let (diff, scale) = max_difference(&x, &x_ref);
         let changed = cap.changes(&a, &fixed).len();
@@ -614,6 +614,130 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
             );
         }
     }
+}
+
+/// Couplings (loads on free rows proportional to a row of A x, as a
+/// slipping joint point's friction force μ_k r_n s on its tangential rows)
+/// bordered on the factor of another fixed set equal the coupled system
+/// solved another way: a fresh factorisation of the new set, one solve per
+/// coupling's loads and a dense k × k system for the reactions. Reaction
+/// and load rows are drawn free in the base, released and held, on a
+/// simplicial and a supernodal factor; the LU of S is reused for another
+/// load and remade for other coefficients.
+#[test]
+fn capacitance_couplings_equal_the_coupled_system_solved_directly() {
+    for (size, ordering) in [([6, 5, 4], Ordering::Amd), ([12, 10, 8], Ordering::Metis)] {
+        let mut rng = Rng(43);
+        let g = grid(size, 1.0, 0.2, true, &mut rng);
+        let n = g.n_dofs();
+        let (a, _) = assemble_both(&g, 1.0, false);
+        let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+        let presc: Vec<f64> = (0..n).map(|_| rng.range(-1e-3, 1e-3)).collect();
+        let rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
+        let mut m0 = a.clone();
+        m0.apply_dirichlet(&base);
+        let mut solver =
+            CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
+        solver.factorize(&m0).unwrap();
+        let mut cap = Capacitance::new(base.clone());
+        let fixed: Vec<bool> = (0..n)
+            .map(|i| (base[i] && !i.is_multiple_of(10)) || i % 7 == 1)
+            .collect();
+        let pick = |rng: &mut Rng| ((rng.next() * n as f64) as usize).min(n - 1) as u32;
+        let mut couplings: Vec<Coupling> = (0..12)
+            .map(|_| Coupling {
+                reaction_row: pick(&mut rng),
+                loads: vec![
+                    (pick(&mut rng), rng.range(-0.6, 0.6)),
+                    (pick(&mut rng), rng.range(-0.6, 0.6)),
+                ],
+            })
+            .collect();
+        // a released load row and reaction row, a held reaction row, a
+        // load on a held row (dropped)
+        let released = (0..n).find(|&i| base[i] && !fixed[i]).unwrap() as u32;
+        let held = (0..n).find(|&i| fixed[i]).unwrap() as u32;
+        couplings[0].loads[0].0 = released;
+        couplings[1].reaction_row = released;
+        couplings[2].reaction_row = held;
+        couplings[3].loads[1].0 = held;
+        let other_rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
+        let mut scaled = couplings.clone();
+        scaled.iter_mut().for_each(|c| c.loads[0].1 *= 0.5);
+        for (name, load, coupled, new_lu) in [
+            ("coupled", &rhs, &couplings, 1),
+            ("another load", &other_rhs, &couplings, 0),
+            ("other coefficients", &rhs, &scaled, 1),
+        ] {
+            let x_ref = coupled_reference(&a, &fixed, &presc, load, coupled);
+            let lus = cap.stats.s_factorisations;
+            let corrected = cap
+                .solve(&solver, &a, &fixed, &presc, load, coupled)
+                .unwrap();
+            let (diff, scale) = max_difference(&corrected.x, &x_ref);
+            eprintln!(
+                "{size:?} {name}: max difference {diff:.2e} of {scale:.3e}, residual {:.2e}",
+                corrected.residual
+            );
+            assert!(
+                diff <= 1e-10 * scale,
+                "{size:?} {name}: {diff:e} of {scale:e}"
+            );
+            assert!(corrected.residual < 1e-12, "{size:?} {name}");
+            assert_eq!(cap.stats.s_factorisations - lus, new_lu, "{size:?} {name}");
+        }
+    }
+}
+
+/// The coupled system x = M⁻¹(b + G z), z = V x (M, b: A and `rhs` with
+/// `fixed` held at `presc`; G the couplings' loads on free rows, V their
+/// reaction rows of A) by a fresh factorisation of M, a solve per coupling
+/// and the dense k × k system (I − V M⁻¹G) z = V M⁻¹b.
+fn coupled_reference(
+    a: &SparseSym,
+    fixed: &[bool],
+    presc: &[f64],
+    rhs: &[f64],
+    couplings: &[Coupling],
+) -> Vec<f64> {
+    let n = a.n();
+    let mut m = a.clone();
+    let mut b = rhs.to_vec();
+    m.apply_dirichlet_with_rhs(fixed, presc, &mut b);
+    let mut fresh =
+        CholeskySolver::with_options(m.pattern().clone(), &Ordering::Amd, faer::Par::Seq).unwrap();
+    fresh.factorize(&m).unwrap();
+    let solve = |mut v: Vec<f64>| {
+        fresh.solve_in_place(&mut v).unwrap();
+        v
+    };
+    let x0 = solve(b);
+    let xg: Vec<Vec<f64>> = couplings
+        .iter()
+        .map(|c| {
+            let mut g = vec![0.0; n];
+            for &(t, coef) in &c.loads {
+                if !fixed[t as usize] {
+                    g[t as usize] += coef;
+                }
+            }
+            solve(g)
+        })
+        .collect();
+    let row = |c: &Coupling, x: &[f64]| {
+        let mut v = 0.0;
+        a.column(c.reaction_row as usize, |j, aj| v += aj * x[j]);
+        v
+    };
+    let k = couplings.len();
+    let lhs = DMatrix::from_fn(k, k, |q, p| {
+        (if q == p { 1.0 } else { 0.0 }) - row(&couplings[q], &xg[p])
+    });
+    let r = DVector::from_fn(k, |q, _| row(&couplings[q], &x0));
+    let z = lhs.lu().solve(&r).unwrap();
+    (0..n)
+        .map(|i| x0[i] + (0..k).map(|p| z[p] * xg[p][i]).sum::<f64>())
+        .collect()
 }
 
 /// The forward half then the backward half is a solve; a reach column
@@ -758,7 +882,7 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
             .iter()
             .filter(|c| c.1 == groutready::fem::RowChange::Diagonal)
             .count();
-        let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
+        let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs, &[]).unwrap();
         let (diff, x_scale) = max_difference(&corrected.x, &x_ref);
         eprintln!(
             "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}, residual {:.2e}",
@@ -779,13 +903,46 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
     // a diagonal change shares the column of the row fixed at the same dof
     let fixed: Vec<bool> = (0..n).map(|i| base[i] || i % 6 == 3).collect();
     let before = cap.stats.columns;
-    let _ = cap.solve(&solver, &a1, &fixed, &presc, &rhs).unwrap();
+    let _ = cap.solve(&solver, &a1, &fixed, &presc, &rhs, &[]).unwrap();
     let spring_rows_base_free = (0..n).filter(|&i| i % 6 == 3 && !base[i]).count();
     assert!(spring_rows_base_free > 0);
     assert!(
         cap.stats.columns - before < spring_rows_base_free as u64,
         "the rows newly fixed reuse the spring rows' columns"
     );
+    // S is factorised once per distinct system: the same changed rows and
+    // springs under another load reuse its LU; the same rows with other
+    // spring values (another δ) do not, and all three equal a fresh
+    // factorisation
+    let respring = {
+        let mut m = a.clone();
+        for i in (0..n).filter(|i| i % 6 == 3) {
+            m.add_diag(i, 3.0 * scale * (1.0 + (i % 5) as f64));
+        }
+        m
+    };
+    let fixed: Vec<bool> = (0..n).map(both).collect();
+    let other_rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
+    for (name, matrix, load, new_lu) in [
+        ("both again", &a1, &rhs, 1),
+        ("another load", &a1, &other_rhs, 0),
+        ("other springs", &respring, &rhs, 1),
+    ] {
+        let mut m1 = matrix.clone();
+        let mut rhs1 = load.clone();
+        m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
+        let x_ref = fresh_solution(&m1, &rhs1);
+        let lus = cap.stats.s_factorisations;
+        let corrected = cap
+            .solve(&solver, matrix, &fixed, &presc, load, &[])
+            .unwrap();
+        let (diff, x_scale) = max_difference(&corrected.x, &x_ref);
+        assert!(
+            diff <= 1e-12 * x_scale,
+            "{name}: differs by {diff:.3e} (scale {x_scale:.3e})"
+        );
+        assert_eq!(cap.stats.s_factorisations - lus, new_lu, "{name}");
+    }
 }
 
 /// Timing of pattern, assembly, symbolic and numeric Cholesky and one solve
