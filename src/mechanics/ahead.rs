@@ -13,10 +13,9 @@
 //! only — the elements' ages and creep coefficients over the step — not on
 //! step n's solution, so it can be assembled before step n's passes and
 //! factorised while they run. Only the joint states are not known yet: the
-//! factor is made with the rows and springs that step n's *first pass*
-//! found (its corrections make most of a step's open/closed changes), and
-//! step n+1 starts from it as from any factor whose rows differ from its
-//! guess, through the exact capacitance correction of
+//! factor is made with the rows and springs of step n's *start* states,
+//! and step n+1 starts from it as from any factor whose rows differ from
+//! its guess, through the exact capacitance correction of
 //! [`crate::fem::capacitance`] (refactorising past the usual break-even).
 //! The answer is the same as the factorisation made at the step's start,
 //! to round-off.
@@ -25,16 +24,17 @@
 //! (`groutready study perf`): the earlier the guess, the longer the
 //! factorisation overlaps step n's passes, and the more rows of step n+1
 //! differ from it. With the correction's columns two full sweeps each,
-//! and factorising ahead only steps without a pour at their start, the
-//! start states cost 16,133 correction columns against 11,602 made at the
-//! step's start, the converged states 11,629 columns but 19.8 s waited,
-//! the states after the first pass 13,041 columns and 6.2 s waited, the
-//! least wall time. With the columns as forward halves on their reach
-//! (about 7 % of the rows) the start states are 4 % faster (98.3–98.9 s
-//! against 100.9–104.4 s, 26 Nov 2026), but they are kept after the first
-//! pass: see [`super::contact_step::NextGuess`] for what a restart needs.
-//! The factorisation shares the memory bus with the passes' solves, so the
-//! passes run slower beside it.
+//! the states after step n's first pass cost the least wall time; with
+//! the columns forward halves on their reach (about 7 % of the rows) and
+//! the slip forces solved with the states (3.3 passes a step), the start
+//! states do: the whole step's passes overlap the factorisation. A guess
+//! that lags a step would make a run restarted from a checkpoint (which
+//! has no factor made ahead) differ in the last bits from the run it
+//! continues, and the planner reuses a remedy search only on equal bits:
+//! so the checkpoint carries the guess ([`FactorGuess`], in
+//! [`super::MechState`]) and the restarted run's first step factorises
+//! from it. The factorisation shares the memory bus with the passes'
+//! solves, so the passes run slower beside it.
 //!
 //! The K̃ and element coefficients assembled ahead are the step's own: the
 //! step reuses them ([`FactorAhead::assembled`]) when its elements were
@@ -152,6 +152,8 @@ struct Made {
     interval: (f64, f64),
     target: Target,
     prepared: Prepared,
+    /// the states its rows and springs were guessed from
+    states: Vec<JointPointState>,
     /// K̃ of that step, as assembled ahead
     assembled: Assembled,
 }
@@ -180,16 +182,16 @@ pub struct Order {
 
 impl Order {
     /// The factorisation of the next step's first pass, guessed from this
-    /// step's first-pass `states` on `live`.
+    /// step's start `states` on `live`.
     pub fn job(self, live: &LiveSystem, states: &[JointPointState]) -> Result<Job, SolveError> {
-        let (prepared, target) = match self.births {
+        let (prepared, target, states) = match self.births {
             None => {
                 let prepared = Prepared::first_pass(&self.assembled.stiffness, live, states);
                 let solver = match self.spare {
                     Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
                     _ => live.solver.fork()?,
                 };
-                (prepared, Target::Solver(solver))
+                (prepared, Target::Solver(solver), states.to_vec())
             }
             Some(births) => {
                 let mut states = states.to_vec();
@@ -198,7 +200,7 @@ impl Order {
                 }
                 let prepared =
                     Prepared::first_pass(&self.assembled.stiffness, &births.sys, &states);
-                (prepared, Target::Born(births))
+                (prepared, Target::Born(births), states)
             }
         };
         Ok(Job {
@@ -206,10 +208,22 @@ impl Order {
                 interval: self.interval,
                 target,
                 prepared,
+                states,
                 assembled: self.assembled,
             },
         })
     }
+}
+
+/// What the factor made ahead for the next step was guessed from: its
+/// interval and the joint states (this step's start states, the new pairs
+/// of a pour as a rebuild makes them). A checkpoint carries it, so a run
+/// restarted there factorises its first step from the same guess, on the
+/// main thread, and gives the bits of the run it continues.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FactorGuess {
+    pub interval: (f64, f64),
+    pub states: Vec<JointPointState>,
 }
 
 /// A factorisation to run on the other core.
@@ -354,7 +368,7 @@ impl FactorAhead {
 
     /// The order for the next step's factor over `interval`, whose K̃ is
     /// `assembled`, on this live system or, when its start pours lifts, on
-    /// `births`: the step fills it with its first pass's states.
+    /// `births`: the step fills it with its start states.
     pub fn order(
         &mut self,
         interval: (f64, f64),
@@ -373,15 +387,15 @@ impl FactorAhead {
         }
     }
 
-    /// A factorisation ordered but never started (the step failed before
-    /// its first pass, or no solver could be forked).
+    /// A factorisation ordered but never started (no solver could be
+    /// forked for it).
     pub fn not_made(&mut self) {
         self.stats.failed += 1;
     }
 
     /// Keeps a finished factorisation for its step; `waited` is how long
-    /// the step waited for it. True when a factor was made.
-    pub fn finish(&mut self, done: Done, waited: f64) -> bool {
+    /// the step waited for it. The guess it was made from when it was made.
+    pub fn finish(&mut self, done: Done, waited: f64) -> Option<FactorGuess> {
         self.stats.seconds += done.seconds;
         self.stats.seconds_waited += waited;
         match done.result {
@@ -390,15 +404,19 @@ impl FactorAhead {
                 if matches!(done.made.target, Target::Born(_)) {
                     self.stats.on_new_systems += 1;
                 }
+                let guess = FactorGuess {
+                    interval: done.made.interval,
+                    states: done.made.states.clone(),
+                };
                 self.ready = Some(done.made);
-                true
+                Some(guess)
             }
             Err(_) => {
                 self.stats.failed += 1;
                 if let Target::Solver(s) = done.made.target {
                     self.spare = Some(s);
                 }
-                false
+                None
             }
         }
     }

@@ -210,21 +210,6 @@ pub struct StepSystem<'a> {
     pub day: f64,
 }
 
-/// Called once per step with the states the next step's factor is guessed
-/// from ([`super::ahead`]), made while this step's other passes run: the
-/// states the corrections of the active set's first pass found (the cone
-/// program: its answer). The first pass makes most of a step's open/closed
-/// changes, so the guess usually holds the next step's start states, and a
-/// run restarted from a checkpoint, which factorises its first step at its
-/// start, gives the same bits as the run it continues (the planner reuses
-/// a search only on equal digests of the apertures). Guessing from the
-/// states the first pass starts from overlaps more (demo, 26 Nov 2026: 98.3–
-/// 98.9 s against 100.9–104.4 s, steps waiting 12.1 against 20.2 s for the
-/// factor) but its rows then always lag a step: a restarted run differs
-/// in the last bits and `tests/it/cli_plan.rs`'s re-plan re-ran its nine
-/// re-simulations. A checkpoint that carried the guess would allow it.
-pub type NextGuess<'f> = &'f mut dyn FnMut(&LiveSystem, &[JointPointState]);
-
 /// Solves the step with the configured method; `states` are updated only on
 /// success. `prepared`: `live.solver` already holds the factor of
 /// [`Prepared::m`], made before the step (the active set starts from it;
@@ -235,7 +220,6 @@ pub fn solve(
     states: &mut [JointPointState],
     settings: &JointSolveSettings,
     prepared: Option<Prepared>,
-    next_guess: NextGuess,
 ) -> Result<JointStepOutcome, JointStepError> {
     let mut trial = Trial {
         old: states.to_vec(),
@@ -243,14 +227,8 @@ pub fn solve(
         out: JointStepOutcome::default(),
     };
     let x = match settings.method {
-        ContactSolverKind::ActiveSet => {
-            active_set(sys, live, settings, &mut trial, prepared, next_guess)?
-        }
-        ContactSolverKind::Qp => {
-            let x = condensed_qp(sys, live, settings, &mut trial)?;
-            next_guess(live, &trial.work);
-            x
-        }
+        ContactSolverKind::ActiveSet => active_set(sys, live, settings, &mut trial, prepared)?,
+        ContactSolverKind::Qp => condensed_qp(sys, live, settings, &mut trial)?,
     };
     states.copy_from_slice(&trial.work);
     Ok(JointStepOutcome { x, ..trial.out })
@@ -475,19 +453,14 @@ fn active_set(
     s: &JointSolveSettings,
     trial: &mut Trial,
     prepared: Option<Prepared>,
-    next_guess: NextGuess,
 ) -> Result<Vec<f64>, JointStepError> {
     let mut it = ActiveSet::start(sys, live, s, trial, prepared);
     let mut last_changes = 0;
-    let mut next_guess = Some(next_guess);
     for pass in 1..=s.max_iterations {
         trial.out.iterations = pass;
         let x = it.solve_guess(sys, live, trial)?;
         let mut outcome = it.correct_states(sys, live, s, trial, &x);
         outcome.changes += crack(live, sys.points, &mut trial.work, s.bond_strength, sys.day);
-        if let Some(f) = next_guess.take() {
-            f(live, &trial.work);
-        }
         match it.next_slip_forces(live, trial, outcome) {
             Some(changes) => last_changes = changes,
             None => {

@@ -16,7 +16,7 @@ use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
 use crate::scene::{OrderingKind, SolidElement};
 use crate::vocab::JointState;
 
-use super::ahead::{AheadStats, Assembled, Births, FactorAhead, NextStep};
+use super::ahead::{AheadStats, Assembled, Births, FactorAhead, FactorGuess, NextStep};
 use super::contact_step::{
     self, JointSolveSettings, JointStepError, Prepared, RefactorCounts, StepSystem,
 };
@@ -190,6 +190,11 @@ pub struct MechState {
     pub joints: Vec<JointPointState>,
     /// nodal forces of the joint contacts, per dof [N] (total, not incremental)
     pub f_contact: Vec<f64>,
+    /// what the factor made ahead for the next step was guessed from, if
+    /// one was made: a run restarted here factorises its first step from
+    /// it ([`super::ahead`])
+    #[serde(default)]
+    pub next_factor_guess: Option<FactorGuess>,
 }
 
 impl MechError {
@@ -241,6 +246,9 @@ pub struct MechanicsModel {
     pub stats: MechStats,
     /// the next step's factorisation, made while this one runs
     ahead: FactorAhead,
+    /// a restored state's [`MechState::next_factor_guess`], for the first
+    /// step after the restore
+    restored_guess: Option<FactorGuess>,
 }
 
 /// Per-element constants of the mechanical problem, computed once.
@@ -335,6 +343,7 @@ impl MechState {
             f_ext: vec![0.0; 3 * n_nodes],
             water_load: vec![0.0; 3 * n_nodes],
             weight_applied: vec![false; n_el],
+            next_factor_guess: None,
         };
         for e in (0..n_el).filter(|&e| !concrete[e]) {
             state.live[e] = true;
@@ -437,6 +446,7 @@ impl MechanicsModel {
             stats,
             points,
             ahead: FactorAhead::new(factor_ahead(settings)),
+            restored_guess: None,
         })
     }
 
@@ -448,6 +458,7 @@ impl MechanicsModel {
         self.prescribed.clear();
         self.dirty = true;
         self.ahead.forget();
+        self.restored_guess = self.state.next_factor_guess.clone();
     }
 
     /// Factorise the next step on the second core while a step's contact
@@ -777,9 +788,10 @@ impl MechanicsModel {
         })
     }
 
-    /// The joint step from the factor made ahead for it, if any, while
-    /// the next step's is made on the other core from the states of this
-    /// step's first pass, when due ([`super::ahead`]).
+    /// The joint step from the factor made ahead for it, if any (after a
+    /// restore: made now from the guess the checkpoint carries), while the
+    /// next step's is made on the other core from this step's start states,
+    /// when due ([`super::ahead`]).
     fn solve_joints_ahead(
         &mut self,
         t0: f64,
@@ -788,7 +800,11 @@ impl MechanicsModel {
         prescribed: &[f64],
         t1: f64,
     ) -> Result<Vec<f64>, MechError> {
-        let prepared = self.ahead.take(t0, t1, &mut self.sys, a);
+        let prepared = match self.ahead.take(t0, t1, &mut self.sys, a) {
+            Some(p) => Some(p),
+            None => self.factor_restored_guess(a, t0, t1)?,
+        };
+        self.state.next_factor_guess = None;
         let t_asm = Instant::now();
         let symbolic_before = self.stats.seconds_symbolic;
         // An error of the next step's system is the next step's to report.
@@ -805,35 +821,60 @@ impl MechanicsModel {
             },
             None => None,
         };
+        let job = order.map(|o| o.job(&self.sys, &self.state.joints));
         // the next live set's analysis is counted as symbolic
         let symbolic = self.stats.seconds_symbolic - symbolic_before;
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64() - symbolic;
-        let Some(order) = order else {
-            return self.solve_joints(a, b, prescribed, t1, prepared, &mut |_, _| {});
-        };
-        let (x, done) = std::thread::scope(|scope| {
-            let mut order = Some(order);
-            let mut handle = None;
-            let mut next_guess = |live: &LiveSystem, states: &[JointPointState]| {
-                if let Some(job) = order.take().and_then(|o| o.job(live, states).ok()) {
-                    handle = Some(job.spawn(scope));
-                }
-            };
-            let x = self.solve_joints(a, b, prescribed, t1, prepared, &mut next_guess);
-            let t = Instant::now();
-            let done = handle.map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
-            (x, done.map(|d| (d, t.elapsed().as_secs_f64())))
-        });
-        match done {
-            Some((done, waited)) => {
-                if self.ahead.finish(done, waited) {
-                    self.stats.numeric += 1;
-                    self.stats.numeric_flops += self.sys.solver.factor_flops();
-                }
+        let job = match job {
+            Some(Ok(job)) => job,
+            Some(Err(_)) => {
+                self.ahead.not_made();
+                return self.solve_joints(a, b, prescribed, t1, prepared);
             }
-            None => self.ahead.not_made(),
+            None => return self.solve_joints(a, b, prescribed, t1, prepared),
+        };
+        let (x, done, waited) = std::thread::scope(|scope| {
+            let handle = job.spawn(scope);
+            let x = self.solve_joints(a, b, prescribed, t1, prepared);
+            let t = Instant::now();
+            let done = handle
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
+            (x, done, t.elapsed().as_secs_f64())
+        });
+        if let Some(guess) = self.ahead.finish(done, waited) {
+            self.stats.numeric += 1;
+            self.stats.numeric_flops += self.sys.solver.factor_flops();
+            self.state.next_factor_guess = Some(guess);
         }
         x
+    }
+
+    /// After a restore, the first step's factor as the run that wrote the
+    /// checkpoint made it ahead: from the guess it carries, when that was
+    /// for this step (None otherwise, or past the first step).
+    fn factor_restored_guess(
+        &mut self,
+        a: &SparseSym,
+        t0: f64,
+        t1: f64,
+    ) -> Result<Option<Prepared>, MechError> {
+        let Some(guess) = self.restored_guess.take() else {
+            return Ok(None);
+        };
+        if guess.interval != (t0, t1) || guess.states.len() != self.state.joints.len() {
+            return Ok(None);
+        }
+        let prepared = Prepared::first_pass(a, &self.sys, &guess.states);
+        let t = Instant::now();
+        self.sys
+            .solver
+            .factorize(&prepared.m)
+            .map_err(|source| MechError::Solve { day: t1, source })?;
+        self.stats.seconds_numeric += t.elapsed().as_secs_f64();
+        self.stats.numeric += 1;
+        self.stats.numeric_flops += self.sys.solver.factor_flops();
+        Ok(Some(prepared))
     }
 
     /// The stiffness of the live elements at their mid-step ages (made
@@ -985,7 +1026,6 @@ impl MechanicsModel {
         prescribed: &[f64],
         day: f64,
         prepared: Option<Prepared>,
-        next_guess: contact_step::NextGuess,
     ) -> Result<Vec<f64>, MechError> {
         let t_joint = Instant::now();
         let step = StepSystem {
@@ -1001,7 +1041,6 @@ impl MechanicsModel {
             &mut self.state.joints,
             &self.joint_settings,
             prepared,
-            next_guess,
         )
         .map_err(|source| MechError::Joints { day, source })?;
         self.stats.numeric += out.factorizations;
