@@ -1,5 +1,7 @@
-//! Progress bars for long runs (hidden when stderr is not a terminal, so
-//! unattended runs and CI logs stay clean).
+//! Progress bars for long runs. When stderr is not a terminal (a run left
+//! with its output in a log: the large arch's whole construction takes
+//! hours) the bar is hidden and a line is printed at each tenth of the
+//! simulated days instead, so the log says how far the run got.
 
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -16,7 +18,17 @@ pub fn bar(what: &str) -> ProgressBar {
 
 pub fn update(bar: &ProgressBar, day: f64, end: f64) {
     if end > 0.0 {
-        bar.set_position(((day / end) * 1000.0) as u64);
+        let before = bar.position();
+        let now = ((day / end) * 1000.0) as u64;
+        bar.set_position(now);
+        if bar.is_hidden() && now / 100 > before / 100 {
+            eprintln!(
+                "{}: day {day:.0} of {end:.0} ({} %), {:.0} s",
+                bar.message(),
+                now / 10,
+                bar.elapsed().as_secs_f64()
+            );
+        }
     }
     bar.set_prefix(format!("{day:.0}/{end:.0}"));
 }

@@ -45,7 +45,9 @@
 //!   normal reaction row ([`crate::fem::Coupling`]), a non-symmetric
 //!   border of the same capacitance system (exact; on the demo's whole
 //!   construction 2,125 passes where the fixed point took 4,401). Where
-//!   the border would make S too large ([`COUPLED_S_SHARE`]), or a
+//!   the border's new columns, their products and its LU would cost more
+//!   than a factorisation (thousands of slipping points on the complete
+//!   Xiaowan-like dam loaded at once), or a
 //!   point slipped in tension (its force is then μ_k·max(r_n, 0) = 0), the
 //!   slip forces are a fixed point solved by Anderson mixing (re-solves,
 //!   no refactorisation).
@@ -69,7 +71,7 @@
 use std::time::Instant;
 
 use crate::fem::{
-    relative_residual, Capacitance, CapacitanceStats, Coupling, SolveError, SparseSym,
+    relative_residual, Capacitance, CapacitanceStats, Coupling, RowChange, SolveError, SparseSym,
 };
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
@@ -98,12 +100,6 @@ const ANDERSON_DEPTH: usize = 8;
 /// 8.1 s, 3.5 Gflop/s, against 1,090 Gflop of factorisations in 55.7 s,
 /// 19.6 Gflop/s).
 const CAPACITANCE_SOLVE_WEIGHT: f64 = 5.5;
-/// Share of a numeric factorisation's flops the LU of a capacitance system
-/// with the slipping points' couplings may cost ((2/3)(m + k)³ for m
-/// changed rows and k slipping points): below it a pass solves the slip
-/// forces with the contact states (one pass where the fixed point took
-/// 3.8 on the demo), above it they are iterated.
-const COUPLED_S_SHARE: f64 = 0.1;
 /// Memory the capacitance columns of one step may hold [bytes]; above it
 /// the step refactorises.
 const CAPACITANCE_MAX_BYTES: usize = 1 << 30;
@@ -608,17 +604,27 @@ impl ActiveSet {
         let Some((_, cap)) = self.factored.as_ref() else {
             unreachable!("factorised above")
         };
-        // the slip forces with the pass while S stays small against a
-        // factorisation (else the fixed point of `next_slip_forces`)
-        let slips = (0..live.pairs.len())
-            .filter(|&q| {
-                trial.work[live.pairs[q].point as usize].state == PointState::Slip
-                    && self.coupled[q]
-                    && !live.supported[live.pairs[q].first as usize + 2]
-            })
-            .count();
-        let size = (cap.changes(&self.a_cur, &fixed).len() + slips) as f64;
-        let direct = 2.0 / 3.0 * size.powi(3) <= COUPLED_S_SHARE * live.solver.factor_flops();
+        // the slip forces with the pass while their border costs less than
+        // a factorisation (else the fixed point of `next_slip_forces`)
+        let changes = cap.changes(&self.a_cur, &fixed);
+        let mut bordered = changes.clone();
+        for (q, pair) in live.pairs.iter().enumerate() {
+            let f = pair.first;
+            if trial.work[pair.point as usize].state == PointState::Slip
+                && self.coupled[q]
+                && !live.supported[f as usize + 2]
+            {
+                bordered.push((f + 2, RowChange::Released));
+                bordered.extend([(f, RowChange::Fixed), (f + 1, RowChange::Fixed)]);
+            }
+        }
+        let direct = bordered.len() == changes.len() || {
+            let flops = |c: &[(u32, RowChange)]| cap.new_columns_cost(&live.solver, c).0;
+            let size = (bordered.len() - changes.len()) as f64 / 3.0 + changes.len() as f64;
+            (flops(&bordered) - flops(&changes)) * CAPACITANCE_SOLVE_WEIGHT
+                + 2.0 / 3.0 * size.powi(3)
+                <= live.solver.factor_flops()
+        };
         let (presc, mut rhs, couplings) = self.pass_loads(sys, live, trial, direct);
         let Some((factored_springs, cap)) = self.factored.as_mut() else {
             unreachable!("factorised above")
