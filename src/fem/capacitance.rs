@@ -515,8 +515,13 @@ impl Capacitance {
         self.factor_capacitance(a, &border)?;
         // taken out for the applications, which borrow the columns mutably
         let s_factor = self.s_factor.take();
-        let s = s_factor.as_ref().and_then(|f| f.lu.as_ref());
-        let solved = self.refined(solver, s, a, &border, fixed, presc, rhs);
+        let system = System {
+            a,
+            border: &border,
+            fixed,
+            lu: s_factor.as_ref().and_then(|f| f.lu.as_ref()),
+        };
+        let solved = self.refined(solver, &system, presc, rhs);
         self.s_factor = s_factor;
         let (x, norm) = solved?;
         let b_norm = constrained_rhs(a, fixed, presc, rhs)
@@ -539,19 +544,18 @@ impl Capacitance {
     /// One application of the correction, refined on the residual of the
     /// free rows until it stops improving; returns x and that residual's
     /// norm.
-    #[allow(clippy::too_many_arguments)]
     fn refined(
         &mut self,
         solver: &CholeskySolver,
-        s: Option<&PartialPivLu<f64>>,
-        a: &SparseSym,
-        border: &Border,
-        fixed: &[bool],
+        system: &System,
         presc: &[f64],
         rhs: &[f64],
     ) -> Result<(Vec<f64>, f64), SolveError> {
+        let System {
+            a, border, fixed, ..
+        } = *system;
         let n = a.n();
-        let mut x = self.apply(solver, s, a, border, fixed, presc, rhs, false)?;
+        let mut x = self.apply(solver, system, presc, rhs, false)?;
         let (mut r, mut norm) = free_residual(a, fixed, rhs, &border.couplings, &x);
         let zero = vec![0.0; n];
         // four digits below the callers' residual checks (1e-8)
@@ -560,7 +564,7 @@ impl Capacitance {
             if norm <= enough {
                 break;
             }
-            let dx = self.apply(solver, s, a, border, fixed, &zero, &r, true)?;
+            let dx = self.apply(solver, system, &zero, &r, true)?;
             let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
             let (r_next, next) = free_residual(a, fixed, rhs, &border.couplings, &refined);
             self.stats.refinements += 1;
@@ -572,23 +576,25 @@ impl Capacitance {
         Ok((x, norm))
     }
 
-    /// One application of the correction (the columns of `border` filled,
-    /// `s` its capacitance matrix factorised): the forward half of the
+    /// One application of the correction (the columns of the border
+    /// filled, its capacitance matrix factorised): the forward half of the
     /// base solve, the (m + k) × (m + k) system, the backward half. A
     /// `refinement`'s right-hand side (a residual) takes a full forward
     /// half.
-    #[allow(clippy::too_many_arguments)]
     fn apply(
         &mut self,
         solver: &CholeskySolver,
-        s: Option<&PartialPivLu<f64>>,
-        a: &SparseSym,
-        border: &Border,
-        fixed: &[bool],
+        system: &System,
         presc: &[f64],
         rhs: &[f64],
         refinement: bool,
     ) -> Result<Vec<f64>, SolveError> {
+        let System {
+            a,
+            border,
+            fixed,
+            lu: s,
+        } = *system;
         let n = a.n();
         let changes = &border.changes;
         let keep: Vec<bool> = self.base.iter().zip(fixed).map(|(&b, &f)| b && f).collect();
@@ -912,6 +918,17 @@ impl Capacitance {
         }
         Ok(Some(s))
     }
+}
+
+/// The system of one corrected solve: the matrix, its border on the base
+/// factor, the rows held and the LU of its capacitance matrix (`None`
+/// when the border is empty).
+#[derive(Clone, Copy)]
+struct System<'s> {
+    a: &'s SparseSym,
+    border: &'s Border,
+    fixed: &'s [bool],
+    lu: Option<&'s PartialPivLu<f64>>,
 }
 
 /// What one corrected solve borders the base factor with: the changed rows

@@ -545,15 +545,9 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
     let mut rng = Rng(31);
     let g = grid(size, 1.0, 0.2, true, &mut rng);
     let n = g.n_dofs();
-    let (a, _) = assemble_both(&g, 1.0, false);
-    let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+    let (a, base, solver) = base_factor(&g, &ordering);
     let presc: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
     let rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
-    let mut m0 = a.clone();
-    m0.apply_dirichlet(&base);
-    let mut solver =
-        CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
-    solver.factorize(&m0).unwrap();
     assert_eq!(solver.is_supernodal(), supernodal, "{size:?}");
     let mut cap = Capacitance::new(base.clone());
     let fix_more = |i: usize| base[i] || i % 7 == 1;
@@ -630,15 +624,9 @@ fn capacitance_couplings_equal_the_coupled_system_solved_directly() {
         let mut rng = Rng(43);
         let g = grid(size, 1.0, 0.2, true, &mut rng);
         let n = g.n_dofs();
-        let (a, _) = assemble_both(&g, 1.0, false);
-        let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+        let (a, base, solver) = base_factor(&g, &ordering);
         let presc: Vec<f64> = (0..n).map(|_| rng.range(-1e-3, 1e-3)).collect();
         let rhs: Vec<f64> = (0..n).map(|_| rng.range(-1e6, 1e6)).collect();
-        let mut m0 = a.clone();
-        m0.apply_dirichlet(&base);
-        let mut solver =
-            CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
-        solver.factorize(&m0).unwrap();
         let mut cap = Capacitance::new(base.clone());
         let fixed: Vec<bool> = (0..n)
             .map(|i| (base[i] && !i.is_multiple_of(10)) || i % 7 == 1)
@@ -687,6 +675,20 @@ fn capacitance_couplings_equal_the_coupled_system_solved_directly() {
             assert_eq!(cap.stats.s_factorisations - lus, new_lu, "{size:?} {name}");
         }
     }
+}
+
+/// The elasticity matrix of `g`, the base fixed set (every 5th row) and
+/// the factor of the matrix with it held, in `ordering`.
+fn base_factor(g: &Grid, ordering: &Ordering) -> (SparseSym, Vec<bool>, CholeskySolver) {
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(g, 1.0, false);
+    let base: Vec<bool> = (0..n).map(|i| i.is_multiple_of(5)).collect();
+    let mut m0 = a.clone();
+    m0.apply_dirichlet(&base);
+    let mut solver =
+        CholeskySolver::with_options(a.pattern().clone(), ordering, faer::Par::Seq).unwrap();
+    solver.factorize(&m0).unwrap();
+    (a, base, solver)
 }
 
 /// The coupled system x = M⁻¹(b + G z), z = V x (M, b: A and `rhs` with
