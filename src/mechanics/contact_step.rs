@@ -45,9 +45,10 @@
 //!   normal reaction row ([`crate::fem::Coupling`]), a non-symmetric
 //!   border of the same capacitance system (exact; on the demo's whole
 //!   construction 2,125 passes where the fixed point took 4,401). Where
-//!   the border's new columns, their products and its LU would cost more
+//!   the border's columns, their products and its LU would cost more
 //!   than a factorisation (thousands of slipping points on the complete
-//!   Xiaowan-like dam loaded at once), or a
+//!   Xiaowan-like dam loaded at once; decided on the states alone, so the
+//!   exact path decides alike), or a
 //!   point slipped in tension (its force is then μ_k·max(r_n, 0) = 0), the
 //!   slip forces are a fixed point solved by Anderson mixing (re-solves,
 //!   no refactorisation).
@@ -71,7 +72,7 @@
 use std::time::Instant;
 
 use crate::fem::{
-    relative_residual, Capacitance, CapacitanceStats, Coupling, RowChange, SolveError, SparseSym,
+    relative_residual, Capacitance, CapacitanceStats, Coupling, SolveError, SparseSym,
 };
 use crate::joint::{ContactProblem, ContactSettings, FrictionModel};
 use crate::scene::ContactSolverKind;
@@ -601,30 +602,32 @@ impl ActiveSet {
     ) -> Result<Vec<f64>, JointStepError> {
         let (fixed, springs) = guess_rows(live, &trial.work);
         self.factor_for(sys, live, trial, &fixed, springs)?;
-        let Some((_, cap)) = self.factored.as_ref() else {
-            unreachable!("factorised above")
-        };
         // the slip forces with the pass while their border costs less than
-        // a factorisation (else the fixed point of `next_slip_forces`)
-        let changes = cap.changes(&self.a_cur, &fixed);
-        let mut bordered = changes.clone();
-        for (q, pair) in live.pairs.iter().enumerate() {
-            let f = pair.first;
-            if trial.work[pair.point as usize].state == PointState::Slip
-                && self.coupled[q]
-                && !live.supported[f as usize + 2]
-            {
-                bordered.push((f + 2, RowChange::Released));
-                bordered.extend([(f, RowChange::Fixed), (f + 1, RowChange::Fixed)]);
-            }
-        }
-        let direct = bordered.len() == changes.len() || {
-            let flops = |c: &[(u32, RowChange)]| cap.new_columns_cost(&live.solver, c).0;
-            let size = (bordered.len() - changes.len()) as f64 / 3.0 + changes.len() as f64;
-            (flops(&bordered) - flops(&changes)) * CAPACITANCE_SOLVE_WEIGHT
-                + 2.0 / 3.0 * size.powi(3)
-                <= live.solver.factor_flops()
-        };
+        // a factorisation (else the fixed point of `next_slip_forces`);
+        // decided on the states and the live system alone, so the exact
+        // path and the correction decide alike
+        let slipping: Vec<u32> = live
+            .pairs
+            .iter()
+            .enumerate()
+            .filter(|&(q, pair)| {
+                trial.work[pair.point as usize].state == PointState::Slip
+                    && self.coupled[q]
+                    && !live.supported[pair.first as usize + 2]
+            })
+            .map(|(_, pair)| pair.first)
+            .collect();
+        let k = slipping.len() as f64;
+        let border_flops: f64 = slipping
+            .iter()
+            .flat_map(|&f| [f, f + 1, f + 2])
+            .map(|dof| {
+                let (flops, rows) = live.solver.reach_cost(dof as usize);
+                flops + 2.0 * rows as f64 * 3.0 * k
+            })
+            .sum();
+        let direct = border_flops * CAPACITANCE_SOLVE_WEIGHT + 2.0 / 3.0 * k.powi(3)
+            <= live.solver.factor_flops();
         let (presc, mut rhs, couplings) = self.pass_loads(sys, live, trial, direct);
         let Some((factored_springs, cap)) = self.factored.as_mut() else {
             unreachable!("factorised above")
