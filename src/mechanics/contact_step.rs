@@ -612,8 +612,7 @@ impl ActiveSet {
             .enumerate()
             .filter(|&(q, pair)| {
                 trial.work[pair.point as usize].state == PointState::Slip
-                    && self.coupled[q]
-                    && !live.supported[pair.first as usize + 2]
+                    && self.can_couple(live, q)
             })
             .map(|(_, pair)| pair.first)
             .collect();
@@ -718,7 +717,7 @@ impl ActiveSet {
                     }
                 }
                 PointState::Stick => presc[f + 2] = -g_old,
-                PointState::Slip if direct && self.coupled[q] && !live.supported[f + 2] => {
+                PointState::Slip if direct && self.can_couple(live, q) => {
                     presc[f + 2] = -g_old;
                     // μ_k s r_n with r_n = r_old_n + (K̃x)_n − b_n: the
                     // constant part here, (K̃x)_n through the coupling
@@ -746,6 +745,13 @@ impl ActiveSet {
             }
         }
         (presc, rhs, couplings)
+    }
+
+    /// Whether slipping pair `q`'s friction force may be a coupling: it
+    /// has not slipped in tension and its normal reaction is not a
+    /// support's.
+    fn can_couple(&self, live: &LiveSystem, q: usize) -> bool {
+        self.coupled[q] && !live.supported[live.pairs[q].first as usize + 2]
     }
 
     /// Why the factor in `live` cannot serve the guess with rows `fixed`
