@@ -60,7 +60,7 @@ use crate::vocab::ZoneId;
 
 use super::readiness::ZoneReadiness;
 use super::runner::Span;
-use super::search::{margins, BuildSupercooled, Ctx};
+use super::search::{margins, simulate, BuildSupercooled, Ctx};
 
 /// How far from the zone-by-zone answer the program may move a zone [grid
 /// steps]: the finite differences are one step wide, so the model is
@@ -319,16 +319,16 @@ pub(super) struct Together {
 
 /// One evaluated grid point: its margins (two per zone), whether every
 /// zone passed, and the deciding apertures [mm].
-struct Point {
+pub(super) struct Point {
     k: Vec<u32>,
     m: Vec<f64>,
-    passed: bool,
-    apertures: Vec<f64>,
+    pub(super) passed: bool,
+    pub(super) apertures: Vec<f64>,
 }
 
 /// Runs the grid points two at a time (the machine's cores) and reads every
 /// zone's rules in each.
-fn evaluate(
+pub(super) fn evaluate(
     ctx: &mut Ctx,
     cands: &[&ZoneReadiness],
     span: &Span,
@@ -348,11 +348,11 @@ fn evaluate(
             .iter()
             .map(|k| build(&ids.iter().copied().zip(k.iter().copied()).collect()).0)
             .collect();
-        let runner = ctx.runner;
+        let (runner, temps) = (ctx.runner, ctx.temperatures_only);
         let hs: Vec<Result<History, SimError>> = std::thread::scope(|sc| {
             let jobs: Vec<_> = scheds
                 .iter()
-                .map(|s| sc.spawn(move || runner.simulate(s, span)))
+                .map(|s| sc.spawn(move || simulate(runner, temps, s, span)))
                 .collect();
             jobs.into_iter()
                 .map(|j| j.join().expect("a re-simulation does not panic"))

@@ -3,11 +3,12 @@
 //! or before the first date the edit changes.
 
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
+use std::sync::OnceLock;
 
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::Schedules;
-use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation};
+use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation, StopWhen};
 use crate::vocab::Day;
 
 use super::edit::first_change;
@@ -27,6 +28,33 @@ pub struct Runner<'a> {
     /// re-simulations run (they may run on several threads; the plan
     /// reports their wall time, measured around the whole search)
     resimulations: AtomicUsize,
+    /// the scene with its thermal effects alone, made on first use
+    /// ([`Runner::simulate_temperatures`])
+    thermal_scene: OnceLock<Scene>,
+}
+
+/// How a re-simulation runs, besides what it covers.
+struct Control<'c> {
+    /// keep a checkpoint every this many days
+    every_days: Option<i64>,
+    /// set from another thread to cancel the run
+    cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// called after every step with (day, end)
+    progress: Option<&'c mut dyn FnMut(f64, f64)>,
+    /// asked at every midnight whether the rows so far suffice
+    stop: Option<&'c mut StopWhen<'c>>,
+}
+
+impl Control<'_> {
+    /// No checkpoints, no cancelling, no progress, to the span's end.
+    fn plain() -> Self {
+        Control {
+            every_days: None,
+            cancel: None,
+            progress: None,
+            stop: None,
+        }
+    }
 }
 
 /// What one run should cover.
@@ -86,6 +114,7 @@ impl<'a> Runner<'a> {
             history,
             lineages: Vec::new(),
             resimulations: AtomicUsize::new(0),
+            thermal_scene: OnceLock::new(),
         }
     }
 
@@ -93,6 +122,42 @@ impl<'a> Runner<'a> {
     /// checkpoint on or before the first date they differ from the baseline.
     pub fn simulate(&self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
         self.simulate_with(schedules, span, None, &mut |_, _| {})
+    }
+
+    /// [`Runner::simulate`] with the thermal effects alone: the same
+    /// temperatures (the mechanics never feeds back into the heat
+    /// equation), no stresses or apertures, at a fraction of the cost. For
+    /// searches whose criterion is a temperature; an answer they find is
+    /// confirmed by a run with every effect.
+    pub fn simulate_temperatures(
+        &self,
+        schedules: &Schedules,
+        span: &Span,
+    ) -> Result<History, SimError> {
+        let scene = self.thermal_scene.get_or_init(|| {
+            let mut s = self.scene.clone();
+            s.effects.retain(|e| e.is_thermal());
+            s
+        });
+        let sim = self.resimulate(scene, schedules, span, Control::plain())?;
+        Ok(sim.history())
+    }
+
+    /// [`Runner::simulate`] that ends at the first midnight where `stop`
+    /// says the rows so far suffice (checked at every midnight; its
+    /// argument builds [`Simulation::history`] when asked).
+    pub fn simulate_until(
+        &self,
+        schedules: &Schedules,
+        span: &Span,
+        stop: &mut StopWhen,
+    ) -> Result<History, SimError> {
+        let control = Control {
+            stop: Some(stop),
+            ..Control::plain()
+        };
+        let sim = self.resimulate(self.scene, schedules, span, control)?;
+        Ok(sim.history())
     }
 
     /// [`Runner::simulate`] that can be cancelled from another thread and
@@ -104,7 +169,12 @@ impl<'a> Runner<'a> {
         cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<History, SimError> {
-        let sim = self.resimulate(schedules, span, None, cancel, progress)?;
+        let control = Control {
+            cancel,
+            progress: Some(progress),
+            ..Control::plain()
+        };
+        let sim = self.resimulate(self.scene, schedules, span, control)?;
         Ok(sim.history())
     }
 
@@ -116,7 +186,11 @@ impl<'a> Runner<'a> {
         span: &Span,
         every_days: i64,
     ) -> Result<Lineage, SimError> {
-        let mut sim = self.resimulate(schedules, span, Some(every_days), None, &mut |_, _| {})?;
+        let control = Control {
+            every_days: Some(every_days),
+            ..Control::plain()
+        };
+        let mut sim = self.resimulate(self.scene, schedules, span, control)?;
         Ok(Lineage {
             schedules: schedules.clone(),
             checkpoints: std::mem::take(&mut sim.checkpoints),
@@ -163,15 +237,26 @@ impl<'a> Runner<'a> {
         self.restart_for(schedules, span).map(|r| r.0.day)
     }
 
-    fn resimulate(
-        &self,
+    /// A run of `scene` (this runner's, or its thermal part) restarted from
+    /// the latest checkpoint that serves `schedules` (a checkpoint's
+    /// mechanical state is left out when `scene` has no mechanics).
+    fn resimulate<'s>(
+        &'s self,
+        scene: &'s Scene,
         schedules: &Schedules,
         span: &Span,
-        every_days: Option<i64>,
-        cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
-        progress: &mut dyn FnMut(f64, f64),
-    ) -> Result<Simulation<'a>, SimError> {
-        let mut sim = Simulation::new(self.scene, self.mesh, schedules)?;
+        control: Control,
+    ) -> Result<Simulation<'s>, SimError> {
+        let Control {
+            every_days,
+            cancel,
+            progress,
+            stop,
+        } = control;
+        let (mut quiet, mut never) = (|_, _| {}, |_: Day, _: &Simulation| false);
+        let progress = progress.unwrap_or(&mut quiet);
+        let stop = stop.unwrap_or(&mut never);
+        let mut sim = Simulation::new(scene, self.mesh, schedules)?;
         // The remedy searches run two re-simulations side by side: the
         // second core is theirs.
         sim.set_factor_ahead(false);
@@ -191,7 +276,7 @@ impl<'a> Runner<'a> {
         if let Some((ck, history)) = restart {
             sim.restore(ck, history);
         }
-        sim.run(None, progress)?;
+        sim.run_until(None, progress, stop)?;
         self.resimulations.fetch_add(1, AtomicOrdering::Relaxed);
         Ok(sim)
     }

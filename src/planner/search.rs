@@ -39,7 +39,7 @@ use super::limits;
 use super::memo::{digest, DelayPart, Found, Lineage, Part, SearchMemo, SupercoolPart, Verified};
 use super::plan::zone_history;
 use super::readiness::{
-    ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, ZoneHistory,
+    ChosenTogether, DelayOption, Remedy, RemedyChoice, Rule, SupercoolOption, Verdict, ZoneHistory,
     ZoneReadiness, CAUTION_MARK,
 };
 use super::rules::{HistoryIndex, Rules};
@@ -79,6 +79,9 @@ pub(super) struct Ctx<'x, 'r, 'a> {
     /// the runs this search made, and the last day it read
     pub(super) runs: usize,
     read_until: Day,
+    /// runs simulate the thermal effects alone and checks leave the
+    /// aperture out (a search on temperatures; see [`supercool_search`])
+    pub(super) temperatures_only: bool,
 }
 
 impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
@@ -97,13 +100,14 @@ impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
             progress,
             runs: 0,
             read_until: Day(i64::MIN),
+            temperatures_only: false,
         }
     }
 
     fn run(&mut self, what: &str, s: &Schedules, span: &Span) -> Result<History, SimError> {
         (self.progress)(what);
         self.runs += 1;
-        self.runner.simulate(s, span)
+        simulate(self.runner, self.temperatures_only, s, span)
     }
 
     /// Notes that the search's answer depends on the runs up to `day`.
@@ -113,7 +117,29 @@ impl<'x, 'r, 'a> Ctx<'x, 'r, 'a> {
 
     pub(super) fn check(&self, h: &History, s: &Schedules, key: ZoneId, day: Day) -> ZoneReadiness {
         let grout = grout_days(self.rules, s);
-        self.rules.evaluate(&HistoryIndex::new(h), key, day, &grout)
+        let mut r = self.rules.evaluate(&HistoryIndex::new(h), key, day, &grout);
+        if self.temperatures_only {
+            // a thermal run has no apertures: the search reads the other rules
+            r.checks.retain(|c| c.rule != Rule::Aperture);
+            if r.checks.iter().all(|c| c.passed) {
+                r.verdict = Verdict::Groutable;
+            }
+        }
+        r
+    }
+}
+
+/// A re-simulation of `s`: of every effect, or of the thermal ones alone.
+pub(super) fn simulate(
+    runner: &Runner,
+    temperatures_only: bool,
+    s: &Schedules,
+    span: &Span,
+) -> Result<History, SimError> {
+    if temperatures_only {
+        runner.simulate_temperatures(s, span)
+    } else {
+        runner.simulate(s, span)
     }
 }
 
@@ -662,6 +688,15 @@ impl Bracket {
 /// Supercooling on the grid `k·step ≤ max`, all candidate zones in the
 /// same runs: one run at the largest ΔT brackets each zone, then each round
 /// halves every open bracket (see the module doc).
+///
+/// When every candidate fails on its temperature alone (its joint already
+/// open enough), the least supercooling is a question for the heat
+/// equation: the grid search and the set chosen together run the thermal
+/// effects alone ([`Runner::simulate_temperatures`], the same temperatures
+/// at a fraction of the cost), and the answer is confirmed by runs with
+/// every effect ([`confirm_with_mechanics`]), whose apertures it reports.
+/// Should a joint close under the answer there, the search runs again with
+/// every effect.
 fn supercool_search(
     ctx: &mut Ctx,
     base: &Schedules,
@@ -703,8 +738,38 @@ fn supercool_search(
     let build = |ks: &BTreeMap<ZoneId, u32>| {
         edit::supercool_with_water(base, layout, &edits(ks), above, s.min_water_temp_c)
     };
+    let open_enough = |z: &&ZoneReadiness| {
+        z.checks
+            .iter()
+            .any(|c| c.rule == Rule::Aperture && c.passed)
+    };
+    if cands.iter().all(open_enough) {
+        ctx.temperatures_only = true;
+        let found = grid_search(ctx, &cands, k_max, &span, &build);
+        ctx.temperatures_only = false;
+        if let Some(found) = confirm_with_mechanics(ctx, &cands, found?, &span, &build)? {
+            out.extend(found);
+            return Ok(out);
+        }
+        (ctx.progress)("a joint closes under the supercooling found on temperatures: searching with every effect");
+    }
+    out.extend(grid_search(ctx, &cands, k_max, &span, &build)?);
+    Ok(out)
+}
 
-    let mut brackets = bracket_at_max(ctx, &cands, k_max, &span, &build, &mut out)?;
+/// The search of [`supercool_search`] on the runs `ctx` makes: the
+/// brackets, their rounds and the sets chosen together.
+fn grid_search(
+    ctx: &mut Ctx,
+    cands: &[&ZoneReadiness],
+    k_max: u32,
+    span: &Span,
+    build: &BuildSupercooled,
+) -> Result<Found<SupercoolOption>, SimError> {
+    let s = ctx.rules.settings;
+    let step = s.supercooling_step_c;
+    let mut out: Found<SupercoolOption> = HashMap::new();
+    let mut brackets = bracket_at_max(ctx, cands, k_max, span, build, &mut out)?;
     // Bracketed search on the grid, all zones in the same runs.
     while brackets.values().any(Bracket::open) {
         let ks: BTreeMap<ZoneId, u32> = brackets.iter().map(|(&k, b)| (k, b.proposal())).collect();
@@ -712,7 +777,7 @@ fn supercool_search(
         let h = ctx.run(
             &format!("supercooling search, {} zones", brackets.len()),
             &sched,
-            &span,
+            span,
         )?;
         for (key, b) in brackets.iter_mut() {
             if !b.open() {
@@ -747,10 +812,70 @@ fn supercool_search(
         .filter(|z| brackets.contains_key(&z.zone_id()))
         .collect();
     let zbz: Vec<u32> = group.iter().map(|z| brackets[&z.zone_id()].hi.0).collect();
-    if let Some(t) = joint_remedy::optimise(ctx, &group, &zbz, k_max, &span, &build)? {
+    if let Some(t) = joint_remedy::optimise(ctx, &group, &zbz, k_max, span, build)? {
         chosen_together(&t, step, &mut out);
     }
     Ok(out)
+}
+
+/// Runs the supercooling `found` on temperatures with every effect: the
+/// proposed steps, and, where sets were chosen together, the zone-by-zone
+/// steps as well (whether they held applied together is part of the
+/// answer). Returns `found` with the deciding apertures of those runs, or
+/// None when a proposed zone is not groutable there (a joint closed).
+fn confirm_with_mechanics(
+    ctx: &mut Ctx,
+    cands: &[&ZoneReadiness],
+    mut found: Found<SupercoolOption>,
+    span: &Span,
+    build: &BuildSupercooled,
+) -> Result<Option<Found<SupercoolOption>>, SimError> {
+    let step = ctx.rules.settings.supercooling_step_c;
+    let grid = |c: f64| (c / step).round() as u32;
+    let proposed: BTreeMap<ZoneId, u32> = found
+        .iter()
+        .filter_map(|(k, (o, _))| o.as_ref().map(|o| (*k, grid(o.delta_c))))
+        .collect();
+    if proposed.is_empty() {
+        return Ok(Some(found));
+    }
+    let zone_by_zone: BTreeMap<ZoneId, u32> = found
+        .iter()
+        .filter_map(|(k, (o, _))| {
+            o.as_ref().map(|o| {
+                let c = o.together.as_ref().map_or(o.delta_c, |t| t.zone_by_zone_c);
+                (*k, grid(c))
+            })
+        })
+        .collect();
+    let mut points = vec![proposed.clone()];
+    if zone_by_zone != proposed {
+        points.push(zone_by_zone);
+    }
+    let group: Vec<&ZoneReadiness> = cands
+        .iter()
+        .copied()
+        .filter(|z| proposed.contains_key(&z.zone_id()))
+        .collect();
+    let ids: Vec<ZoneId> = group.iter().map(|z| z.zone_id()).collect();
+    let ks: Vec<Vec<u32>> = points
+        .iter()
+        .map(|p| ids.iter().map(|z| p[z]).collect())
+        .collect();
+    let runs = joint_remedy::evaluate(ctx, &group, span, build, &ks)?;
+    if !runs[0].passed {
+        return Ok(None);
+    }
+    let held = runs.get(1).is_none_or(|r| r.passed);
+    for (i, z) in ids.iter().enumerate() {
+        if let Some((Some(o), _)) = found.get_mut(z) {
+            o.aperture_mm = runs[0].apertures[i];
+            if let Some(t) = o.together.as_mut() {
+                t.zone_by_zone_held = held;
+            }
+        }
+    }
+    Ok(Some(found))
 }
 
 /// Writes each set of neighbours the joint step changed into `out` (each
@@ -933,23 +1058,101 @@ fn delay_search(
         observe: (first.0..=end.0).map(Day).collect(),
     };
     let sched = edit::ungrout(base, &keys);
-    let h = ctx.run(
-        &format!(
-            "{} zones left ungrouted for up to {} days",
-            keys.len(),
-            s.max_delay_days
-        ),
-        &sched,
-        &span,
-    )?;
-    let idx = HistoryIndex::new(&h);
+    (ctx.progress)(&format!(
+        "{} zones left ungrouted for up to {} days",
+        keys.len(),
+        s.max_delay_days
+    ));
+    ctx.runs += 1;
+    // The run stops once every zone has its day: an answer reads no row
+    // after it, so the rest of the window would change nothing.
+    let rules = ctx.rules;
+    let mut stop = |day: Day, sim: &crate::sim::Simulation| {
+        day > first
+            && (day.0 - first.0) % DELAY_STOP_CHECK_DAYS == 0
+            && delay_days(rules, base, flagged, &sim.history())
+                .iter()
+                .all(|(_, d)| d.found())
+    };
+    let h = ctx.runner.simulate_until(&sched, &span, &mut stop)?;
+    for (key, d) in delay_days(rules, base, flagged, &h) {
+        match d {
+            DelayDay::Found {
+                days,
+                day,
+                also,
+                aperture_mm,
+            } => {
+                ctx.read(day);
+                let option = DelayOption {
+                    days,
+                    date: ctx.rules.epoch.date(day),
+                    aperture_mm,
+                    also_delayed: also,
+                };
+                out.insert(key, (Some(option), String::new()));
+            }
+            DelayDay::NotFound { last, at_last } => {
+                ctx.read(last);
+                let why = format!(
+                    "still not groutable after {} days of delay ({})",
+                    s.max_delay_days,
+                    at_last.reasons()
+                );
+                out.insert(key, (None, why));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// How often (in days) the delay run asks whether it may stop: each ask
+/// reads the whole history so far.
+const DELAY_STOP_CHECK_DAYS: i64 = 5;
+
+/// A flagged zone's outcome in the delay run.
+enum DelayDay {
+    /// groutable after `days` of delay, on `day`, with the zones above on
+    /// the same joint planned before it (they move with it) and the
+    /// deciding aperture then [mm]
+    Found {
+        days: u32,
+        day: Day,
+        also: Vec<u32>,
+        aperture_mm: f64,
+    },
+    /// not groutable up to `last` (the window's or the run's end); its
+    /// readiness then
+    NotFound {
+        last: Day,
+        at_last: Box<ZoneReadiness>,
+    },
+}
+
+impl DelayDay {
+    fn found(&self) -> bool {
+        matches!(self, DelayDay::Found { .. })
+    }
+}
+
+/// Each flagged zone's first day within the delay window on which every
+/// rule passes in the run `h`, bottom-up per joint so that a lower zone's
+/// new date is known above it. An answer reads no row after its day.
+fn delay_days(
+    rules: &Rules,
+    base: &Schedules,
+    flagged: &[ZoneReadiness],
+    h: &History,
+) -> Vec<(ZoneId, DelayDay)> {
+    let s = rules.settings;
+    let idx = HistoryIndex::new(h);
     let sim_end = h.joint_records.rows.last().map_or(Day(0), |r| r.0);
-    let mut grout = grout_days(ctx.rules, base);
-    // Bottom-up per joint, so a lower zone's new date is known above it.
+    let mut grout = grout_days(rules, base);
     let mut order: Vec<&ZoneReadiness> = flagged.iter().collect();
     order.sort_by_key(|z| (z.joint, z.zone));
+    let mut out = Vec::with_capacity(order.len());
     for z in order {
-        let (key, planned) = (z.zone_id(), ctx.rules.epoch.day(z.planned));
+        let (key, planned) = (z.zone_id(), rules.epoch.day(z.planned));
         let mut found = None;
         for d in 1..=s.max_delay_days {
             let day = planned.plus(d as i64);
@@ -957,8 +1160,7 @@ fn delay_search(
                 break;
             }
             grout.insert(key, day);
-            if ctx
-                .rules
+            if rules
                 .evaluate(&idx, key, day, &grout)
                 .checks
                 .iter()
@@ -968,56 +1170,36 @@ fn delay_search(
                 break;
             }
         }
-        match found {
+        let outcome = match found {
             Some((days, day)) => {
-                ctx.read(day);
                 let also: Vec<u32> = base
                     .grouting
                     .iter()
                     .filter(|g| g.joint == z.joint && g.zone > z.zone)
-                    .filter(|g| ctx.rules.epoch.day(g.planned) < day)
+                    .filter(|g| rules.epoch.day(g.planned) < day)
                     .map(|g| g.zone)
                     .collect();
                 for &above in &also {
                     grout.insert(ZoneId::new(z.joint, above), day);
                 }
-                let a = ctx
-                    .rules
-                    .deciding_aperture(&idx, key, day)
-                    .unwrap_or(f64::NAN);
-                out.insert(
-                    key,
-                    (
-                        Some(DelayOption {
-                            days,
-                            date: ctx.rules.epoch.date(day),
-                            aperture_mm: a,
-                            also_delayed: also,
-                        }),
-                        String::new(),
-                    ),
-                );
+                let aperture_mm = rules.deciding_aperture(&idx, key, day).unwrap_or(f64::NAN);
+                DelayDay::Found {
+                    days,
+                    day,
+                    also,
+                    aperture_mm,
+                }
             }
             None => {
                 grout.insert(key, planned);
                 let last = planned.plus(s.max_delay_days as i64).min(sim_end);
-                ctx.read(last);
-                let at_end = ctx.rules.evaluate(&idx, key, last, &grout);
-                out.insert(
-                    key,
-                    (
-                        None,
-                        format!(
-                            "still not groutable after {} days of delay ({})",
-                            s.max_delay_days,
-                            at_end.reasons()
-                        ),
-                    ),
-                );
+                let at_last = Box::new(rules.evaluate(&idx, key, last, &grout));
+                DelayDay::NotFound { last, at_last }
             }
-        }
+        };
+        out.push((key, outcome));
     }
-    Ok(out)
+    out
 }
 
 #[cfg(test)]

@@ -185,7 +185,9 @@ impl Simulation<'_> {
 
     /// Continues from `ck` (taken from a run of the same scene) with this
     /// simulation's schedules; `history` supplies the rows before its day.
-    /// Both the checkpoint and this simulation must have the same effects.
+    /// The checkpoint must hold every effect this simulation has (the
+    /// thermal part of a run restores from a checkpoint of the whole:
+    /// `planner::Runner::simulate_temperatures`).
     pub fn restore(&mut self, ck: &Checkpoint, history: &History) {
         self.day = ck.day.t();
         self.ladder = ck.ladder;

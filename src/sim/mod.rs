@@ -117,6 +117,10 @@ pub struct ZoneTemps {
     pub rows: Vec<(Day, Vec<[f64; 2]>)>,
 }
 
+/// Asked at every midnight of a run (its events applied and recorded)
+/// whether it may end there ([`Simulation::run_until`]).
+pub type StopWhen<'f> = dyn FnMut(Day, &Simulation) -> bool + 'f;
+
 /// Counters of one run: which systems were assembled and solved.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunStats {
@@ -321,8 +325,21 @@ impl<'a> Simulation<'a> {
     /// (day, end).
     pub fn run(
         &mut self,
+        snapshots: Option<&mut SnapshotSink<'_>>,
+        progress: &mut dyn FnMut(f64, f64),
+    ) -> Result<RunStats, SimError> {
+        self.run_until(snapshots, progress, &mut |_, _| false)
+    }
+
+    /// [`Simulation::run`] that ends early, at the first midnight (its
+    /// events applied and recorded) where `stop` says the rows so far
+    /// answer the question asked: a search that has found what it looks
+    /// for. Stopping changes nothing before it.
+    pub fn run_until(
+        &mut self,
         mut snapshots: Option<&mut SnapshotSink<'_>>,
         progress: &mut dyn FnMut(f64, f64),
+        stop: &mut StopWhen,
     ) -> Result<RunStats, SimError> {
         let start = std::time::Instant::now();
         let end = self.end_day().t();
@@ -383,6 +400,9 @@ impl<'a> Simulation<'a> {
                 self.record();
             }
             progress(self.day, end);
+            if self.day.fract() == 0.0 && stop(Day(self.day as i64), self) {
+                break;
+            }
         }
         Ok(RunStats {
             steps: self.steps,

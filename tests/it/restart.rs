@@ -353,3 +353,83 @@ fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
         "the edit changed apertures by only {changed:e}"
     );
 }
+
+/// The planner's two cheaper runs read what the whole run reads: a run of
+/// the thermal effects alone (its temperature searches) has the same zone
+/// temperatures to the bit, and a run stopped when a search has its answer
+/// (the delay search) has the same rows up to its stop, and none after.
+#[test]
+fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
+    use groutready::planner::runner::{Runner, Span};
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    let layout = app::dam_layout(&inputs.mesh);
+    let zone = ZoneId::new(2, 3);
+    let planned = inputs.schedules.grouting_of(zone).unwrap().planned;
+    let (remedied, _) = edit::supercool(
+        &inputs.schedules,
+        &layout,
+        &[edit::Supercool {
+            zone,
+            delta_c: 2.0,
+            planned,
+            from: inputs.scene.epoch.date(Day(100)),
+        }],
+        3,
+    );
+    let runner = Runner::from_parts(
+        &inputs.scene,
+        &inputs.mesh,
+        inputs.schedules.clone(),
+        base.checkpoints.clone(),
+        base.history(),
+    );
+    let span = Span {
+        end_day: END,
+        observe: vec![],
+    };
+    let restart = runner.restart_day(&remedied, &span).unwrap();
+    assert!(restart < Day(150), "restarts on {restart:?}");
+    let whole = runner.simulate(&remedied, &span).unwrap();
+
+    let thermal = runner.simulate_temperatures(&remedied, &span).unwrap();
+    let temps = |h: &History| -> Vec<(Day, Vec<u64>)> {
+        h.zone_temps
+            .rows
+            .iter()
+            .map(|(d, r)| (*d, r.iter().flatten().map(|t| t.to_bits()).collect()))
+            .collect()
+    };
+    assert_eq!(temps(&thermal), temps(&whole));
+    assert!(
+        whole.zone_temps.rows.iter().any(|r| r.0 > restart),
+        "the re-simulation recorded temperatures"
+    );
+    let last_aperture = |h: &History| h.joint_records.rows.last().map(|r| r.0);
+    assert!(
+        last_aperture(&thermal) < Some(restart.plus(1)),
+        "no apertures without the mechanics: {:?}",
+        last_aperture(&thermal)
+    );
+    assert_eq!(last_aperture(&whole), Some(END));
+
+    let stop_at = Day(150);
+    let stopped = runner
+        .simulate_until(&remedied, &span, &mut |d, _| d >= stop_at)
+        .unwrap();
+    let up_to = |h: &History, end: Day| {
+        let mut h = h.clone();
+        h.joint_records.rows.retain(|r| r.0 <= end);
+        h.zone_temps.rows.retain(|r| r.0 <= end);
+        h.records.rows.retain(|r| r.0 <= end);
+        h
+    };
+    assert_eq!(last_aperture(&stopped), Some(stop_at));
+    let (diff, days, labels, dt) = compare(&up_to(&whole, stop_at), &stopped, restart);
+    assert!(days >= 20, "compared {days} days");
+    assert_eq!(
+        (diff, labels, dt),
+        (0.0, 0, 0.0),
+        "bit for bit up to the stop"
+    );
+}
