@@ -35,6 +35,10 @@ pub struct Runner<'a> {
 
 /// How a re-simulation runs, besides what it covers.
 struct Control<'c> {
+    /// factorise each mechanical step on the second core
+    /// (`solver.factor_ahead`); off where the remedy searches run two
+    /// re-simulations side by side, whose second core is the other's
+    factor_ahead: bool,
     /// keep a checkpoint every this many days
     every_days: Option<i64>,
     /// set from another thread to cancel the run
@@ -49,6 +53,7 @@ impl Control<'_> {
     /// No checkpoints, no cancelling, no progress, to the span's end.
     fn plain() -> Self {
         Control {
+            factor_ahead: false,
             every_days: None,
             cancel: None,
             progress: None,
@@ -188,6 +193,8 @@ impl<'a> Runner<'a> {
     ) -> Result<Lineage, SimError> {
         let control = Control {
             every_days: Some(every_days),
+            // the plan's last run, with nothing beside it
+            factor_ahead: true,
             ..Control::plain()
         };
         let mut sim = self.resimulate(self.scene, schedules, span, control)?;
@@ -248,6 +255,7 @@ impl<'a> Runner<'a> {
         control: Control,
     ) -> Result<Simulation<'s>, SimError> {
         let Control {
+            factor_ahead,
             every_days,
             cancel,
             progress,
@@ -257,9 +265,7 @@ impl<'a> Runner<'a> {
         let progress = progress.unwrap_or(&mut quiet);
         let stop = stop.unwrap_or(&mut never);
         let mut sim = Simulation::new(scene, self.mesh, schedules)?;
-        // The remedy searches run two re-simulations side by side: the
-        // second core is theirs.
-        sim.set_factor_ahead(false);
+        sim.set_factor_ahead(factor_ahead);
         sim.cancel = cancel;
         sim.checkpoint_every = every_days;
         sim.set_end_day(span.end_day);
