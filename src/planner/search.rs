@@ -8,7 +8,13 @@
 //!   zones at their upper end) and halves each bracket by that zone's own
 //!   verdict. Cooling a zone opens its neighbours too, so the combined
 //!   answer is verified by one more run (and a zone that fails there gets
-//!   one step more, up to the maximum);
+//!   one step more, up to the maximum). When every candidate fails on its
+//!   temperature alone (its joint already open enough), the search and the
+//!   set chosen together below run the thermal effects alone
+//!   ([`Runner::simulate_temperatures`]: the same temperatures to the bit,
+//!   about 15× cheaper on the demo) and their answer is confirmed by runs
+//!   with every effect, whose apertures it reports; a joint that closes
+//!   under it sends the search back to runs with every effect;
 //! - **supercooling together**: zones that are neighbours (sharing a block,
 //!   at the same or the next level) are then chosen as one least-cost set
 //!   from that answer by a linear program on finite-difference
@@ -17,12 +23,22 @@
 //!   part of the supercooling search (and of its memo part);
 //! - **delay**: one run with the flagged zones left ungrouted and every day
 //!   of the delay window a step end, read bottom-up per joint; zones above
-//!   on the same joint planned earlier than the new date move with it;
+//!   on the same joint planned earlier than the new date move with it. The
+//!   run stops once every zone has its day ([`Simulation::run_until`]; an
+//!   answer reads no row after its day, so the rest of the window would
+//!   change nothing);
 //! - the cheaper remedy by the scene's cost weights is proposed, and all
 //!   proposals are applied together in a final run that re-checks every zone
 //!   still to grout and keeps each remedied zone's history in that run, from
 //!   the as-of date to its date with the remedy (`Remedy::verified_history`,
-//!   drawn by the charts).
+//!   drawn by the charts). That run is the plan's last and runs alone, so
+//!   it factorises each mechanical step ahead on the second core; the
+//!   searches' runs, two side by side, do not.
+//!
+//! Verified by `tests/it/planner_*.rs`, `tests/it/demo_plan.rs`,
+//! `tests/it/cli_plan.rs` and `tests/it/restart.rs` (a thermal run's zone
+//! temperatures equal the whole run's to the bit, a stopped run's rows its
+//! prefix).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -30,7 +46,7 @@ use chrono::NaiveDate;
 
 use crate::scene::PlannerSettings;
 use crate::schedule::{DamLayout, Schedules};
-use crate::sim::{History, SimError};
+use crate::sim::{History, SimError, Simulation};
 use crate::vocab::{Day, ZoneId};
 
 use super::edit::{self, Supercool};
@@ -1067,7 +1083,7 @@ fn delay_search(
     // The run stops once every zone has its day: an answer reads no row
     // after it, so the rest of the window would change nothing.
     let rules = ctx.rules;
-    let mut stop = |day: Day, sim: &crate::sim::Simulation| {
+    let mut stop = |day: Day, sim: &Simulation| {
         day > first
             && (day.0 - first.0) % DELAY_STOP_CHECK_DAYS == 0
             && delay_days(rules, base, flagged, &sim.history())
