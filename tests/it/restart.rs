@@ -269,17 +269,10 @@ fn a_water_change_inside_a_running_stage_restarts_at_its_date() {
     assert!(cooler, "the colder water must cool the zone by day 170+");
 }
 
-/// A re-simulation restarts from the latest checkpoint of any run the
-/// runner holds — the baseline or the last plan's verification run (a
-/// lineage, issue 15 item 4) — before the first date it differs from that
-/// run, and equals the run from the baseline's checkpoint.
-#[test]
-fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
-    use groutready::planner::runner::{Runner, Span};
-    let inputs = inputs();
-    let base = run(&inputs, &inputs.schedules, None);
+/// The last plan's remedy on the small dam: zone 3 of joint 2 supercooled
+/// 2 °C from day 100.
+fn remedy(inputs: &Inputs) -> Schedules {
     let layout = app::dam_layout(&inputs.mesh);
-    // The last plan's remedy: zone 3 of joint 2 supercooled from day 100.
     let zone = ZoneId::new(2, 3);
     let planned = inputs.schedules.grouting_of(zone).unwrap().planned;
     let (remedied, _) = edit::supercool(
@@ -293,6 +286,30 @@ fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
         }],
         3,
     );
+    remedied
+}
+
+/// A planner's runner over the baseline run `base`.
+fn runner<'a>(inputs: &'a Inputs, base: &Simulation) -> groutready::planner::runner::Runner<'a> {
+    groutready::planner::runner::Runner::from_parts(
+        &inputs.scene,
+        &inputs.mesh,
+        inputs.schedules.clone(),
+        base.checkpoints.clone(),
+        base.history(),
+    )
+}
+
+/// A re-simulation restarts from the latest checkpoint of any run the
+/// runner holds — the baseline or the last plan's verification run (a
+/// lineage, issue 15 item 4) — before the first date it differs from that
+/// run, and equals the run from the baseline's checkpoint.
+#[test]
+fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
+    use groutready::planner::runner::Span;
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    let remedied = remedy(&inputs);
     // This week's edit on top: zone 2 of joint 2 grouted a week later.
     let moved = ZoneId::new(2, 2);
     let g = inputs.schedules.grouting_of(moved).unwrap().planned;
@@ -310,13 +327,7 @@ fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
         "remedy on {remedy_day:?}, edit on {edit_day:?}"
     );
 
-    let mut runner = Runner::from_parts(
-        &inputs.scene,
-        &inputs.mesh,
-        inputs.schedules.clone(),
-        base.checkpoints.clone(),
-        base.history(),
-    );
+    let mut runner = runner(&inputs, &base);
     let span = Span {
         end_day: END,
         observe: vec![],
@@ -360,30 +371,11 @@ fn a_resimulation_restarts_from_the_latest_run_it_agrees_with() {
 /// (the delay search) has the same rows up to its stop, and none after.
 #[test]
 fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
-    use groutready::planner::runner::{Runner, Span};
+    use groutready::planner::runner::Span;
     let inputs = inputs();
     let base = run(&inputs, &inputs.schedules, None);
-    let layout = app::dam_layout(&inputs.mesh);
-    let zone = ZoneId::new(2, 3);
-    let planned = inputs.schedules.grouting_of(zone).unwrap().planned;
-    let (remedied, _) = edit::supercool(
-        &inputs.schedules,
-        &layout,
-        &[edit::Supercool {
-            zone,
-            delta_c: 2.0,
-            planned,
-            from: inputs.scene.epoch.date(Day(100)),
-        }],
-        3,
-    );
-    let runner = Runner::from_parts(
-        &inputs.scene,
-        &inputs.mesh,
-        inputs.schedules.clone(),
-        base.checkpoints.clone(),
-        base.history(),
-    );
+    let remedied = remedy(&inputs);
+    let runner = runner(&inputs, &base);
     let span = Span {
         end_day: END,
         observe: vec![],
