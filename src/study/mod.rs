@@ -104,6 +104,8 @@ pub struct PerfOptions {
 /// complete dam (up to [`COMPLETE_MECHANICS_MAX_DOFS`] unless
 /// `complete_mechanics`). With `exact`, a scene with joints is run again
 /// on the exact path and the two compared where the planner reads them.
+/// A scene with joints and a grouting schedule whose whole construction
+/// was timed is then planned from scratch, and that is timed too.
 pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError> {
     let PerfOptions {
         max_days,
@@ -169,6 +171,18 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 );
             }
             timed.complete_dam(complete_mechanics)?;
+        }
+        // The planner's cost where the whole construction was timed: the
+        // same scene planned from scratch (baseline and remedy searches).
+        let own_schedules = scene0
+            .schedules_dir(path)
+            .is_some_and(|d| d.join("pours.csv").exists());
+        if max_days.is_none()
+            && own_schedules
+            && scene0.has(Effect::Joints)
+            && !schedules.grouting.is_empty()
+        {
+            println!("{:<22} {}", "", restart::plan_from_scratch(path)?);
         }
     }
     Ok(())

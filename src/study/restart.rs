@@ -20,34 +20,14 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
         "planning into {} (a scratch folder, removed at the end)",
         out.display()
     );
-    let quiet = &mut |_| {};
-    let time = |inputs: &app::Inputs,
-                req: &PlanRequest,
-                out: &Path,
-                quiet: &mut dyn FnMut(crate::planner::Progress)|
-     -> Result<(f64, crate::planner::Plan), StudyError> {
-        let t = Instant::now();
-        let plan_err = |source: app::AppError| StudyError::Plan {
-            scene: scene.display().to_string(),
-            source: Box::new(source),
-        };
-        let out = app::OutDir::prepare(out, inputs, false).map_err(|e| plan_err(e.into()))?;
-        let s = app::plan::plan(inputs, &out, req, quiet).map_err(plan_err)?;
-        Ok((t.elapsed().as_secs_f64(), s.plan))
-    };
+    let time = |inputs: &app::Inputs, req: &PlanRequest, out: &Path| timed(scene, inputs, req, out);
     let scratch = PlanRequest {
         from_scratch: true,
         ..Default::default()
     };
-    let (t0, p0) = time(&inputs, &scratch, &out, quiet)?;
-    println!(
-        "{}: plan from scratch {t0:.1} s (baseline {:.1} s, {} re-simulations {:.1} s)",
-        inputs.scene.name,
-        p0.stats.baseline_seconds,
-        p0.stats.resimulations,
-        p0.stats.resimulation_seconds
-    );
-    let (t1, p1) = time(&inputs, &PlanRequest::default(), &out, quiet)?;
+    let (t0, p0) = time(&inputs, &scratch, &out)?;
+    println!("{}: {}", inputs.scene.name, from_scratch_line(t0, &p0));
+    let (t1, p1) = time(&inputs, &PlanRequest::default(), &out)?;
     println!(
         "same schedules again: {t1:.1} s, {:.1}× faster (baseline {:.1} s, restarted from {}; {} re-simulations; reused: {}); same readiness table: {}",
         t0 / t1,
@@ -70,8 +50,8 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
             g.planned += chrono::Duration::days(7);
         }
     }
-    let (t2, p2) = time(&inputs, &PlanRequest::default(), &out, quiet)?;
-    let (t3, p3) = time(&inputs, &scratch, &tmp.join("scratch"), quiet)?;
+    let (t2, p2) = time(&inputs, &PlanRequest::default(), &out)?;
+    let (t3, p3) = time(&inputs, &scratch, &tmp.join("scratch"))?;
     let mut diff = 0.0f64;
     for (a, b) in p2.zones.iter().zip(&p3.zones) {
         if let (Some(x), Some(y)) = (a.apertures_mm.min, b.apertures_mm.min) {
@@ -94,6 +74,47 @@ pub fn restart(scene: &Path) -> Result<(), StudyError> {
     );
     let _ = std::fs::remove_dir_all(&tmp);
     Ok(())
+}
+
+/// The plan of `scene` (loaded as `inputs`) asked by `req`, written into
+/// `out` (a scratch folder), and its wall time.
+fn timed(
+    scene: &Path,
+    inputs: &app::Inputs,
+    req: &PlanRequest,
+    out: &Path,
+) -> Result<(f64, crate::planner::Plan), StudyError> {
+    let t = Instant::now();
+    let plan_err = |source: app::AppError| StudyError::Plan {
+        scene: scene.display().to_string(),
+        source: Box::new(source),
+    };
+    let out = app::OutDir::prepare(out, inputs, false).map_err(|e| plan_err(e.into()))?;
+    let s = app::plan::plan(inputs, &out, req, &mut |_| {}).map_err(plan_err)?;
+    Ok((t.elapsed().as_secs_f64(), s.plan))
+}
+
+/// "plan from scratch 38.5 s (baseline 18.8 s, 11 re-simulations 19.6 s)"
+fn from_scratch_line(t: f64, p: &crate::planner::Plan) -> String {
+    format!(
+        "plan from scratch {t:.1} s (baseline {:.1} s, {} re-simulations {:.1} s)",
+        p.stats.baseline_seconds, p.stats.resimulations, p.stats.resimulation_seconds
+    )
+}
+
+/// The plan of `scene` from scratch (its own schedules, the default as-of
+/// date), timed, for `study perf`: one line.
+pub fn plan_from_scratch(scene: &Path) -> Result<String, StudyError> {
+    let inputs = app::load_inputs(scene, None)?;
+    let tmp = tempfile_dir()?;
+    let scratch = PlanRequest {
+        from_scratch: true,
+        ..Default::default()
+    };
+    let timed = timed(scene, &inputs, &scratch, &tmp.join("plan"));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let (t, p) = timed?;
+    Ok(from_scratch_line(t, &p))
 }
 
 fn reused(p: &crate::planner::Plan) -> String {
