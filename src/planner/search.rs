@@ -12,7 +12,7 @@
 //!   temperature alone (its joint already open enough), the search and the
 //!   set chosen together below run the thermal effects alone
 //!   ([`Runner::simulate_temperatures`]: the same temperatures to the bit,
-//!   about 15× cheaper on the demo) and their answer is confirmed by runs
+//!   10–15× cheaper on the demo) and their answer is confirmed by runs
 //!   with every effect, whose apertures it reports; a joint that closes
 //!   under it sends the search back to runs with every effect;
 //! - **supercooling together**: zones that are neighbours (sharing a block,
