@@ -174,11 +174,8 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
         }
         // The planner's cost where the whole construction was timed: the
         // same scene planned from scratch (baseline and remedy searches).
-        let own_schedules = scene0
-            .schedules_dir(path)
-            .is_some_and(|d| d.join("pours.csv").exists());
         if max_days.is_none()
-            && own_schedules
+            && own_schedules(&scene0, path).is_some()
             && scene0.has(Effect::Joints)
             && !schedules.grouting.is_empty()
         {
@@ -548,14 +545,19 @@ pub fn full_dam_mechanics_step_cost(
 }
 
 /// Scene, mesh and schedules; schedules synthesised when the scene's folder is missing.
+/// The scene's own schedules folder, when it holds a pour schedule (else
+/// `study` synthesizes one).
+fn own_schedules(scene: &Scene, path: &Path) -> Option<PathBuf> {
+    scene
+        .schedules_dir(path)
+        .filter(|d| d.join("pours.csv").exists())
+}
+
 fn load_or_synthesize(
     path: &Path,
 ) -> Result<(Scene, crate::mesh::Mesh, schedule::Schedules), StudyError> {
     let scene = Scene::load(path)?;
-    if let Some(dir) = scene
-        .schedules_dir(path)
-        .filter(|d| d.join("pours.csv").exists())
-    {
+    if let Some(dir) = own_schedules(&scene, path) {
         let inputs = app::load_inputs(path, Some(&dir))?;
         return Ok((inputs.scene, inputs.mesh, inputs.schedules));
     }
