@@ -346,6 +346,9 @@ fn run(
     bar.finish_and_clear();
     print_warnings(&summary.stats.warnings);
     print!("{}", groutready::study::summary_line(&summary));
+    if let Some(g) = &summary.grouting {
+        print!("{g}");
+    }
     println!("wrote {}", summary.out.display());
     Ok(0)
 }

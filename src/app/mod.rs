@@ -158,6 +158,9 @@ pub struct RunSummary {
     pub temperature_rows: usize,
     pub aperture_rows: usize,
     pub snapshots: usize,
+    /// the zones planned within the run, judged on their planned dates
+    /// (a run with joints and a grouting schedule)
+    pub grouting: Option<crate::report::GroutingDistribution>,
 }
 
 /// Runs the simulation and writes the run folder `out` (checked and locked
@@ -207,8 +210,13 @@ pub fn run(
     };
     let pvd = fields.join("fields.pvd");
     mesh::vtu::write_pvd(&pvd, &written).map_err(io_err(&pvd))?;
+    let grouting = grouting_distribution(inputs, &sim);
     let summary = staging.path().join("run.txt");
-    std::fs::write(&summary, run_text(inputs, &stats)).map_err(io_err(&summary))?;
+    let mut text = run_text(inputs, &stats);
+    if let Some(g) = &grouting {
+        text += &g.to_string();
+    }
+    std::fs::write(&summary, text).map_err(io_err(&summary))?;
     let snapshots = written.len();
     staging.commit().map_err(io_err(dest))?;
     Ok(RunSummary {
@@ -219,7 +227,30 @@ pub fn run(
         temperature_rows,
         aperture_rows,
         snapshots,
+        grouting,
     })
+}
+
+/// The deciding apertures and verdicts of the zones planned within a run
+/// with joints, on their planned dates.
+fn grouting_distribution(
+    inputs: &Inputs,
+    sim: &Simulation,
+) -> Option<crate::report::GroutingDistribution> {
+    if sim.joint_records.columns.is_empty() || inputs.schedules.grouting.is_empty() {
+        return None;
+    }
+    let judged = crate::planner::judge_planned(
+        &inputs.scene,
+        &inputs.mesh,
+        &inputs.schedules,
+        &sim.history(),
+        Day::containing(sim.day),
+    );
+    Some(crate::report::GroutingDistribution::of(
+        &judged,
+        &inputs.scene.planner,
+    ))
 }
 
 pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {

@@ -37,6 +37,6 @@ pub mod runner;
 pub mod search;
 pub mod whatif;
 
-pub use plan::{plan, PlanOptions, PlanOutput, Progress};
+pub use plan::{judge_planned, plan, PlanOptions, PlanOutput, Progress};
 pub use readiness::*;
 pub use run::PlannedRun;

@@ -191,6 +191,33 @@ pub fn plan(
     })
 }
 
+/// Every zone of `grouting.csv` planned on or before `end`, judged by the
+/// rules on its planned date in a run's histories: what `plan` finds
+/// before its remedies, which `run` summarises (the large dam is run, not
+/// planned). By planned date, then zone.
+pub fn judge_planned(
+    scene: &Scene,
+    mesh: &Mesh,
+    schedules: &Schedules,
+    history: &History,
+    end: Day,
+) -> Vec<ZoneReadiness> {
+    let layout = dam_layout(mesh);
+    let rules = Rules::new(&scene.planner, &layout, mesh, scene.epoch, schedules);
+    let grout = grout_days(&rules, schedules);
+    let idx = HistoryIndex::new(history);
+    let all = PlanOptions {
+        as_of: scene.epoch.0,
+        horizon_days: None,
+    };
+    all.zones(schedules)
+        .into_iter()
+        .map(|(date, zone)| (scene.epoch.day(date), zone))
+        .filter(|&(day, _)| day <= end)
+        .map(|(day, zone)| rules.evaluate(&idx, zone, day, &grout))
+        .collect()
+}
+
 /// The histories the charts draw: every flagged zone's, then those of the
 /// zones with joint meters.
 fn charted(

@@ -12,6 +12,7 @@
 //! and the readiness table for the terminal (`terminal`).
 
 pub mod charts;
+pub mod distribution;
 pub mod json;
 pub mod markdown;
 pub mod meters;
@@ -26,6 +27,7 @@ use std::path::{Path, PathBuf};
 
 use crate::planner::Plan;
 
+pub use distribution::GroutingDistribution;
 pub use summary::Summary;
 pub use terminal::readiness_table;
 

@@ -130,6 +130,8 @@ fn run_writes_temperatures_apertures_and_snapshots() {
         "{states:?}"
     );
 
+    grouting_distribution_reads_the_csv(&out, &rows);
+
     only(
         &out,
         &[
@@ -290,4 +292,52 @@ fn a_failed_run_keeps_the_previous_run_folder() {
         "previous"
     );
     only(tmp.path(), &["out", "sched"]);
+}
+
+/// `run.txt`'s distribution of the deciding (`min`) apertures on the
+/// planned grouting dates counts what `apertures.csv` holds on those dates.
+fn grouting_distribution_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
+    let grouting = std::fs::read_to_string("schedules/small_dam/grouting.csv").unwrap();
+    let planned: std::collections::HashSet<(String, String, String)> = grouting
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[0].to_string(), f[1].to_string(), f[2].to_string())
+        })
+        .collect();
+    let apertures: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[2] == "min")
+        .filter(|r| planned.contains(&(r[0].into(), r[1].into(), r[3].into())))
+        .map(|r| r[5].parse().unwrap())
+        .collect();
+    assert_eq!(
+        apertures.len(),
+        planned.len(),
+        "one `min` row per zone on its date"
+    );
+    let count = |lo: f64, hi: f64| apertures.iter().filter(|&&a| a >= lo && a < hi).count();
+    let expected = format!(
+        "apertures on the planned grouting dates: {} zones, point min, rule >= 0.50 mm\n  \
+         closed {}, open below 0.50 mm {}, 0.50-1.00 mm {}, 1.00-2.00 mm {}, 2.00-3.00 mm {}, >= 3.00 mm {}\n",
+        planned.len(),
+        count(f64::MIN, 0.005),
+        count(0.005, 0.5),
+        count(0.5, 1.0),
+        count(1.0, 2.0),
+        count(2.0, 3.0),
+        count(3.0, f64::MAX),
+    );
+    let text = std::fs::read_to_string(out.join("run.txt")).unwrap();
+    assert!(text.contains(&expected), "{text}\nexpected:\n{expected}");
+    // every zone is judged once, and each below the rule fails it
+    let verdicts = text.lines().find(|l| l.contains("verdicts:")).unwrap();
+    let n: Vec<usize> = verdicts
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    assert_eq!(n.len(), 3, "{verdicts}");
+    assert_eq!(n.iter().sum::<usize>(), planned.len(), "{verdicts}");
+    assert!(n[2] >= count(f64::MIN, 0.5), "{verdicts}");
 }
