@@ -722,18 +722,24 @@ impl Capacitance {
         keys: std::collections::BTreeSet<(u32, RowChange)>,
     ) -> Result<(), SolveError> {
         let t = std::time::Instant::now();
-        let mut entries = Vec::new();
-        for (dof, change) in keys {
-            entries.clear();
-            match change {
-                RowChange::Fixed | RowChange::Diagonal => entries.push((dof as usize, 1.0)),
-                RowChange::Released => a.column(dof as usize, |i, v| {
-                    if !self.base[i] {
-                        entries.push((i, v));
-                    }
-                }),
-            }
-            let y = solver.forward_reach(&entries, &mut self.work)?;
+        let keys: Vec<(u32, RowChange)> = keys.into_iter().collect();
+        let columns: Vec<Vec<(usize, f64)>> = keys
+            .iter()
+            .map(|&(dof, change)| match change {
+                RowChange::Fixed | RowChange::Diagonal => vec![(dof as usize, 1.0)],
+                RowChange::Released => {
+                    let mut entries = Vec::new();
+                    a.column(dof as usize, |i, v| {
+                        if !self.base[i] {
+                            entries.push((i, v));
+                        }
+                    });
+                    entries
+                }
+            })
+            .collect();
+        let ys = solver.forward_reach_many(&columns, &mut self.work)?;
+        for (&(dof, change), y) in keys.iter().zip(ys) {
             self.index.insert((dof, change), self.y.len() as u32);
             self.stats.column_rows += y.len() as u64;
             self.stats.column_dense_rows += a.n() as u64;

@@ -21,14 +21,26 @@
 //! block of its smallest row below, so visiting the reach in increasing
 //! order is a topological order of the forward substitution.
 //!
+//! The columns of one correction are solved together, [`REACH_BATCH`] at
+//! a time, on the union of their reaches: per block a dense triangular
+//! solve of the panel's rows and one matrix product for the rows below,
+//! so L is read once per batch. On the demo's whole construction the
+//! 40,452 columns took 4.3 s instead of 13.1 s one at a time; on the
+//! Xiaowan-like complete dam the 4,546 columns 10.9 s instead of 84.2 s
+//! (`groutready study perf`, 27 Nov 2026).
+//!
 //! Verified by `tests/it/fem_sparse.rs`: forward then backward equals a
 //! full solve; a reach column equals the dense forward solve of the same
-//! column, and is zero outside its reach; on simplicial and supernodal
-//! factors.
+//! column, and is zero outside its reach; a column solved in a batch
+//! equals its single solve, on the same reach; on simplicial and
+//! supernodal factors.
 
 use std::ops::Range;
 
+use faer::linalg::matmul::matmul;
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+use faer::{Accum, MatMut, MatRef, Par};
 
 /// No parent: a root of the elimination tree.
 const ROOT: u32 = u32::MAX;
@@ -271,12 +283,123 @@ pub(super) fn reach_size(
 }
 
 /// Scratch of the reach solves of one factor: a dense vector kept zero
-/// between columns and the marks of the blocks visited.
+/// between columns and the marks of the blocks visited; for a batch, each
+/// block's first row in the panel and the panel (rows of the union of the
+/// reaches, a row's columns side by side) with the product buffer.
 #[derive(Debug, Default)]
 pub struct ReachWork {
     x: Vec<f64>,
     mark: Vec<bool>,
     reach: Vec<u32>,
+    panel_row: Vec<u32>,
+    panel: Vec<f64>,
+    product: Vec<f64>,
+}
+
+/// Columns [`forward_reach_many`] solves together at most: each block of
+/// L is then read once per batch, in matrix products, instead of once per
+/// column in scalar loops.
+pub const REACH_BATCH: usize = 32;
+
+/// [`forward_reach`] of several columns at once (each its entries: row in
+/// the permuted numbering, value), on the union of their reaches; each
+/// column is returned on its own reach. A block of the union outside a
+/// column's reach receives no update from it, so the column is exactly
+/// zero there and equal to its single solve up to the order of the sums
+/// (`tests/it/fem_sparse.rs`).
+pub(super) fn forward_reach_many(
+    symbolic: &SymbolicCholesky<u32>,
+    values: &[f64],
+    tree: &BlockTree,
+    columns: &[Vec<(usize, f64)>],
+    work: &mut ReachWork,
+) -> Vec<ReachColumn> {
+    let k = columns.len();
+    let nb = tree.n_blocks();
+    if work.mark.len() != nb || work.panel_row.len() != nb {
+        work.mark = vec![false; nb];
+        work.panel_row = vec![u32::MAX; nb];
+    }
+    let own: Vec<Vec<u32>> = columns
+        .iter()
+        .map(|col| {
+            let mut r = Vec::new();
+            for &(row, _) in col {
+                tree.mark_path(row, &mut work.mark, &mut r);
+            }
+            r.iter().for_each(|&b| work.mark[b as usize] = false);
+            r.sort_unstable();
+            r
+        })
+        .collect();
+    let mut union: Vec<u32> = own.iter().flatten().copied().collect();
+    union.sort_unstable();
+    union.dedup();
+    let mut rows = 0usize;
+    for &b in &union {
+        work.panel_row[b as usize] = rows as u32;
+        rows += block_shape(symbolic, b as usize).1;
+    }
+    let ReachWork {
+        panel_row,
+        panel,
+        product,
+        ..
+    } = work;
+    let local = |row: usize| {
+        let b = tree.block_of[row] as usize;
+        panel_row[b] as usize + row - block_shape(symbolic, b).0
+    };
+    panel.clear();
+    panel.resize(rows * k, 0.0);
+    for (c, col) in columns.iter().enumerate() {
+        for &(row, v) in col {
+            panel[local(row) * k + c] += v;
+        }
+    }
+    for &b in &union {
+        let blk = block(symbolic, values, b as usize);
+        let (w, below) = (blk.width, blk.below.len());
+        let first = panel_row[b as usize] as usize * k;
+        let l = MatRef::from_column_major_slice(blk.values, w + below, w);
+        let (l11, l21) = l.split_at_row(w);
+        let x1 = &mut panel[first..first + w * k];
+        solve_lower_triangular_in_place(l11, MatMut::from_row_major_slice_mut(x1, w, k), Par::Seq);
+        if below == 0 {
+            continue;
+        }
+        product.clear();
+        product.resize(below * k, 0.0);
+        matmul(
+            MatMut::from_row_major_slice_mut(product, below, k),
+            Accum::Replace,
+            l21,
+            MatRef::from_row_major_slice(&panel[first..first + w * k], w, k),
+            1.0,
+            Par::Seq,
+        );
+        for (i, &row) in blk.below.iter().enumerate() {
+            let at = local(row as usize) * k;
+            let dst = &mut panel[at..at + k];
+            dst.iter_mut()
+                .zip(&product[i * k..(i + 1) * k])
+                .for_each(|(d, p)| *d -= p);
+        }
+    }
+    own.iter()
+        .enumerate()
+        .map(|(c, reach)| {
+            let mut out = ReachColumn::default();
+            for &b in reach {
+                let (start, w, _, _) = block_shape(symbolic, b as usize);
+                out.spans.push((start as u32, w as u32));
+                let first = panel_row[b as usize] as usize;
+                out.values
+                    .extend((first..first + w).map(|r| panel[r * k + c]));
+            }
+            out
+        })
+        .collect()
 }
 
 /// L⁻¹ u for `entries` (row in the permuted numbering, value), on the reach

@@ -26,7 +26,9 @@ use faer::sparse::SparseColMatRef;
 use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
-use super::half_solves::{forward_reach, reach_size, BlockTree, ReachColumn, ReachWork};
+use super::half_solves::{
+    forward_reach, forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
+};
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
 
@@ -530,6 +532,60 @@ impl CholeskySolver {
             });
         }
         Ok(y)
+    }
+
+    /// [`CholeskySolver::forward_reach`] of several right-hand sides at
+    /// once (at most [`REACH_BATCH`] per batch, solved with matrix
+    /// products on the union of their reaches), each returned on its own
+    /// reach.
+    pub fn forward_reach_many(
+        &self,
+        columns: &[Vec<(usize, f64)>],
+        work: &mut ReachWork,
+    ) -> Result<Vec<ReachColumn>, SolveError> {
+        if !self.factorized {
+            return Err(SolveError::NotFactorized);
+        }
+        let n = self.n();
+        for col in columns {
+            if let Some(&(i, _)) = col.iter().find(|&&(i, v)| i >= n || !v.is_finite()) {
+                return Err(SolveError::NonFinite {
+                    what: "reach right-hand side",
+                    index: i,
+                });
+            }
+        }
+        let t = Instant::now();
+        let mut out = Vec::with_capacity(columns.len());
+        for batch in columns.chunks(REACH_BATCH) {
+            let permuted: Vec<Vec<(usize, f64)>> = batch
+                .iter()
+                .map(|col| {
+                    col.iter()
+                        .map(|&(i, v)| (self.permuted_row(i), v))
+                        .collect()
+                })
+                .collect();
+            out.extend(forward_reach_many(
+                &self.symbolic,
+                &self.l_values,
+                &self.tree,
+                &permuted,
+                work,
+            ));
+        }
+        let seconds = t.elapsed().as_secs_f64();
+        self.record(|s| {
+            s.n_reach_columns += columns.len() as u64;
+            s.reach_seconds += seconds;
+        });
+        if let Some(i) = out.iter().position(|y| !y.is_finite()) {
+            return Err(SolveError::NonFinite {
+                what: "reach solution",
+                index: i,
+            });
+        }
+        Ok(out)
     }
 
     /// Rows and entries of L on the union of the reaches of `dofs`: what a

@@ -92,14 +92,17 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 const MAX_FLIPS: usize = 3;
 /// Slip-force iterates Anderson mixing remembers.
 const ANDERSON_DEPTH: usize = 8;
-/// Cost of one flop of a capacitance column's reach solve (scalar loops
-/// over the blocks of its path, [`crate::fem::CholeskySolver::reach_cost`])
-/// relative to one flop of the numeric factorisation (dense blocks at a
-/// higher rate): the correction is chosen while its new columns cost less
-/// than a factorisation. `groutready study perf` prints what both cost (on
-/// the demo's whole construction, 26 Nov 2026: 28.4 Gflop of columns in
-/// 8.1 s, 3.5 Gflop/s, against 1,090 Gflop of factorisations in 55.7 s,
-/// 19.6 Gflop/s).
+/// Cost of one flop of a capacitance column's reach solve
+/// ([`crate::fem::CholeskySolver::reach_cost`]) relative to one flop of
+/// the numeric factorisation: the correction is chosen while its new
+/// columns cost less than a factorisation. Set when the columns were
+/// scalar loops (demo, 26 Nov 2026: 3.5 against 19.6 Gflop/s). Solved in
+/// batches (27 Nov 2026) they run at 9.8 Gflop/s on the demo and 15.7 on
+/// the Xiaowan-like complete dam, against 17.7 and 49 Gflop/s of
+/// factorisation; a weight of 2 changed nothing on the demo's whole
+/// construction and made its complete-dam step slower (2.84 against
+/// 2.40 s: larger corrections need more refinements), so it stays.
+/// `groutready study perf` prints what both cost.
 const CAPACITANCE_SOLVE_WEIGHT: f64 = 5.5;
 /// Memory the capacitance columns of one step may hold [bytes]; above it
 /// the step refactorises.

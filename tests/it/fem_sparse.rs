@@ -778,12 +778,21 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
         let mut column = Vec::new();
         a.column(n / 2, |i, v| column.push((i, v)));
         let mut reach_rows = Vec::new();
-        for entries in [
+        let columns = vec![
             vec![(0, 1.0)],
             vec![(n - 1, -2.5)],
             vec![(n / 3, 1.0)],
             column,
-        ] {
+        ];
+        // solved together: each on its own reach, its single solve's values
+        let batch = solver.forward_reach_many(&columns, &mut work).unwrap();
+        for (entries, together) in columns.iter().zip(&batch) {
+            let alone = solver.forward_reach(entries, &mut work).unwrap();
+            assert!(alone.rows().eq(together.rows()), "{size:?}: the same reach");
+            let (diff, scale) = max_difference(&together.to_dense(n), &alone.to_dense(n));
+            assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
+        }
+        for entries in columns {
             let y = solver.forward_reach(&entries, &mut work).unwrap();
             let mut dense = vec![0.0; n];
             for &(i, v) in &entries {
@@ -817,7 +826,7 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
             );
         }
         let s = solver.stats();
-        assert_eq!(s.n_reach_columns, 4);
+        assert_eq!(s.n_reach_columns, 12);
     }
 }
 
