@@ -108,6 +108,9 @@ use super::sparse::SparseSym;
 
 /// Refinements of a corrected solution on its residual, at most.
 pub const MAX_REFINEMENTS: usize = 3;
+/// Residual relative to the right-hand side that [`Capacitance::solve`]
+/// refines to: four digits below the callers' residual checks (1e-8).
+pub const REFINE_TO: f64 = 1e-12;
 
 /// The residual rhs + G (A x)_n − A x of the coupled system on the rows not
 /// in `fixed` (zero on them) and its 2-norm.
@@ -183,6 +186,16 @@ fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) ->
         }
     }
     b
+}
+
+/// How far [`Capacitance::solve_to`] refines, and from where.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Refine {
+    /// residual relative to the right-hand side
+    pub to: f64,
+    /// an earlier solution of the same system to refine (the correction's
+    /// own first solution when `None`)
+    pub from: Option<Vec<f64>>,
 }
 
 /// A corrected solution and its relative residual on the changed system.
@@ -470,6 +483,27 @@ impl Capacitance {
         rhs: &[f64],
         couplings: &[Coupling],
     ) -> Result<Corrected, SolveError> {
+        let target = Refine {
+            to: REFINE_TO,
+            from: None,
+        };
+        self.solve_to(solver, a, fixed, presc, rhs, couplings, target)
+    }
+
+    /// [`Capacitance::solve`] refined to the residual `target.to` (relative
+    /// to the right-hand side), from the correction's own first solution
+    /// or from `target.from`, an earlier solution of the same system.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_to(
+        &mut self,
+        solver: &CholeskySolver,
+        a: &SparseSym,
+        fixed: &[bool],
+        presc: &[f64],
+        rhs: &[f64],
+        couplings: &[Coupling],
+        target: Refine,
+    ) -> Result<Corrected, SolveError> {
         let t = std::time::Instant::now();
         let n = a.n();
         if fixed.len() != n || presc.len() != n || rhs.len() != n || self.base.len() != n {
@@ -521,7 +555,7 @@ impl Capacitance {
             fixed,
             lu: s_factor.as_ref().and_then(|f| f.lu.as_ref()),
         };
-        let solved = self.refined(solver, &system, presc, rhs);
+        let solved = self.refined(solver, &system, presc, rhs, target);
         self.s_factor = s_factor;
         let (x, norm) = solved?;
         let b_norm = constrained_rhs(a, fixed, presc, rhs)
@@ -550,16 +584,19 @@ impl Capacitance {
         system: &System,
         presc: &[f64],
         rhs: &[f64],
+        target: Refine,
     ) -> Result<(Vec<f64>, f64), SolveError> {
         let System {
             a, border, fixed, ..
         } = *system;
         let n = a.n();
-        let mut x = self.apply(solver, system, presc, rhs, false)?;
+        let mut x = match target.from {
+            Some(x0) if x0.len() == n => x0,
+            _ => self.apply(solver, system, presc, rhs, false)?,
+        };
         let (mut r, mut norm) = free_residual(a, fixed, rhs, &border.couplings, &x);
         let zero = vec![0.0; n];
-        // four digits below the callers' residual checks (1e-8)
-        let enough = 1e-12 * rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let enough = target.to * rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
         for _ in 0..MAX_REFINEMENTS {
             if norm <= enough {
                 break;

@@ -39,7 +39,9 @@ pub mod solver;
 pub mod sparse;
 pub mod thermal_kernels;
 
-pub use capacitance::{Capacitance, CapacitanceStats, Corrected, Coupling, RowChange};
+pub use capacitance::{
+    Capacitance, CapacitanceStats, Corrected, Coupling, Refine, RowChange, REFINE_TO,
+};
 pub use elasticity::{isotropic_d, poisson_matrix, principal_stresses, von_mises, SolidGauss};
 pub use error::ElementError;
 pub use half_solves::{ReachColumn, ReachWork};

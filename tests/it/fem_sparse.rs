@@ -600,6 +600,34 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
             (formed - unformed).abs() <= 1e-10 * formed,
             "{name}: {formed:e} vs {unformed:e}"
         );
+        // refined from another solution of the same system: none when the
+        // target is loose (the start is returned), to the tight target
+        // otherwise (the contact passes refine their answer so)
+        let solve_from = |cap: &mut Capacitance, to: f64, from: &[f64]| {
+            let refine = groutready::fem::Refine {
+                to,
+                from: Some(from.to_vec()),
+            };
+            cap.solve_to(&solver, &a, &fixed, &presc, &rhs, &[], refine)
+                .unwrap()
+        };
+        let mut start = x.clone();
+        for i in (0..n).filter(|&i| !fixed[i]).step_by(5) {
+            start[i] *= 1.0 + 1e-6;
+        }
+        let refinements = cap.stats.refinements;
+        let kept = solve_from(&mut cap, 1.0, &start);
+        assert_eq!(kept.x, start, "{name}");
+        let off_residual = relative_residual(&m1, &start, &rhs1);
+        assert!(off_residual > 1e-9, "{name}: {off_residual:e}");
+        assert!((kept.residual - off_residual).abs() <= 1e-6 * off_residual);
+        assert_eq!(cap.stats.refinements, refinements, "{name}");
+        let refined = solve_from(&mut cap, groutready::fem::REFINE_TO, &start);
+        assert!(refined.residual <= 1e-12, "{name}: {:e}", refined.residual);
+        assert!(relative_residual(&m1, &refined.x, &rhs1) <= 1e-12, "{name}");
+        assert!(cap.stats.refinements > refinements, "{name}");
+        let (diff, scale) = max_difference(&refined.x, &x_ref);
+        assert!(diff <= 1e-11 * scale, "{name}: {diff:e}");
         if name == "both" {
             assert!(changed > 20, "the case changes rows both ways");
             assert_eq!(
