@@ -454,6 +454,7 @@ impl MechanicsModel {
     /// the same scene); the live system is renumbered and refactorised on the
     /// next step, as after a pour.
     pub fn restore(&mut self, state: &MechState) {
+        self.settle_ahead();
         self.state = state.clone();
         self.prescribed.clear();
         self.dirty = true;
@@ -465,7 +466,17 @@ impl MechanicsModel {
     /// passes run (`solver.factor_ahead`; [`super::ahead`]). Off where the
     /// cores are otherwise busy; the answer is the same to round-off.
     pub fn set_factor_ahead(&mut self, on: bool) {
+        self.settle_ahead();
         self.ahead.set_enabled(on && factor_ahead(&self.settings));
+    }
+
+    /// Waits for the factorisation running ahead, if any, and counts it.
+    fn settle_ahead(&mut self) {
+        if let Some(flops) = self.ahead.settle() {
+            self.stats.numeric += 1;
+            self.stats.numeric_flops += flops;
+        }
+        self.stats.ahead = self.ahead.stats;
     }
 
     /// The step after the next [`MechanicsModel::step`], when no grouting
@@ -726,6 +737,8 @@ impl MechanicsModel {
         temps: Option<(&[f64], &[f64])>,
         water_level: Option<f64>,
     ) -> Result<(), MechError> {
+        // what was made ahead is this step's (or discarded by it)
+        self.settle_ahead();
         if self.dirty {
             self.rebuild()
                 .map_err(|source| MechError::Live { day: t1, source })?;
@@ -833,21 +846,11 @@ impl MechanicsModel {
             }
             None => return self.solve_joints(a, b, prescribed, t1, prepared),
         };
-        let (x, done, waited) = std::thread::scope(|scope| {
-            let handle = job.spawn(scope);
-            let x = self.solve_joints(a, b, prescribed, t1, prepared);
-            let t = Instant::now();
-            let done = handle
-                .join()
-                .unwrap_or_else(|p| std::panic::resume_unwind(p));
-            (x, done, t.elapsed().as_secs_f64())
-        });
-        if let Some(guess) = self.ahead.finish(done, waited) {
-            self.stats.numeric += 1;
-            self.stats.numeric_flops += self.sys.solver.factor_flops();
-            self.state.next_factor_guess = Some(guess);
-        }
-        x
+        // the guess is the checkpoint's from now: a restarted run
+        // factorises the next step from it as this job does
+        self.state.next_factor_guess = Some(job.guess());
+        self.ahead.start(job);
+        self.solve_joints(a, b, prescribed, t1, prepared)
     }
 
     /// After a restore, the first step's factor as the run that wrote the
