@@ -1,12 +1,20 @@
-//! What condensing the rock would save: factorisation flops and L's entries
-//! of the complete mechanical matrix of a scene (METIS), against the
-//! concrete with the rock's Schur complement on the rock–concrete interface
-//! (a dense block), and the one-off factorisation of the rock ordered with
-//! the interface last.
+//! What the rock costs a factorisation, and what reusing one ordering
+//! costs, on the mechanical matrix of a scene (METIS; 3 dofs per node,
+//! joint pairs coupled, no supports: the fill, not the values):
+//!
+//! 1. rock elements by elevation;
+//! 2. the complete dam and rock, the concrete alone, the concrete with the
+//!    rock's Schur complement on the rock–concrete interface (a dense
+//!    block), and the one-off factorisation of the rock with the
+//!    interface last;
+//! 3. the rock and the concrete below a quarter, half, three quarters and
+//!    all of the height: a METIS call of its own against the complete
+//!    mesh's order restricted to its dofs (relative order kept, as
+//!    `mechanics::live::ConstructionOrdering` does).
 //!
 //!     cargo run --release --example rock_condensation [SCENE]
-use groutready::fem::{elasticity, metis_nested_dissection, CholeskySolver, Ordering, Pattern};
-use groutready::mesh::Part;
+use groutready::fem::{metis_nested_dissection, CholeskySolver, Ordering, Pattern};
+use groutready::mesh::{Mesh, Part};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -17,127 +25,73 @@ fn main() -> anyhow::Result<()> {
     let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
     let mesh = &inputs.mesh;
     rock_layers(mesh);
-    let nn = mesh.nodes.len();
-    let (mut in_rock, mut in_conc) = (vec![false; nn], vec![false; nn]);
-    for (e, conn) in mesh.elements.iter().enumerate() {
-        let flag = match mesh.parts[e] {
-            Part::Rock => &mut in_rock,
-            Part::Concrete { .. } => &mut in_conc,
-        };
-        for &v in conn {
-            flag[v as usize] = true;
-        }
-    }
-    let pairs: Vec<[u32; 2]> = mesh
-        .face_pairs
-        .iter()
-        .flat_map(|p| (0..4).map(|k| [p.nodes_a[k], p.nodes_b[k]]))
-        .filter(|[a, b]| a != b)
-        .collect();
-    let node_dofs = |v: u32| [3 * v, 3 * v + 1, 3 * v + 2];
-    let report = |name: &str, pattern: Arc<Pattern>, ord: Ordering| -> anyhow::Result<()> {
-        let t = Instant::now();
-        let s = CholeskySolver::with_options(pattern.clone(), &ord, faer::Par::Seq)?;
-        println!(
-            "{name:10} n={:8} nnz(A)={:10} nnz(L)={:11} flops={:8.2} Gflop (symbolic {:.1} s)",
-            pattern.n_dofs(),
-            pattern.nnz(),
-            s.factor_nnz(),
-            s.factor_flops() / 1e9,
-            t.elapsed().as_secs_f64()
-        );
-        Ok(())
-    };
-    // (a) the complete system
-    let mut elems: Vec<Vec<u32>> = mesh
-        .elements
-        .iter()
-        .map(|c| elasticity::element_dofs(c).to_vec())
-        .collect();
-    elems.extend(
-        pairs
-            .iter()
-            .map(|&[a, b]| [node_dofs(a), node_dofs(b)].concat()),
-    );
-    report(
-        "complete",
-        Arc::new(Pattern::new(3 * nn, &elems)),
-        Ordering::Metis,
-    )?;
+    condensation(mesh)?;
+    ordering_reuse(mesh)
+}
 
-    // (b) the concrete and the interface, the rock's Schur complement a clique
-    let mut map = vec![u32::MAX; nn];
-    let mut n_ci = 0u32;
-    for v in 0..nn {
-        if in_conc[v] {
-            map[v] = n_ci;
-            n_ci += 1;
-        }
-    }
-    let interface: Vec<usize> = (0..nn).filter(|&v| in_conc[v] && in_rock[v]).collect();
+fn node_dofs(v: u32) -> [u32; 3] {
+    [3 * v, 3 * v + 1, 3 * v + 2]
+}
+
+/// The pattern of the elements `live` and the joint pairs between live
+/// nodes, with node `v` numbered `map[v]` (u32::MAX: not in it), plus
+/// `extra` element dof lists.
+fn pattern(
+    mesh: &Mesh,
+    live: &dyn Fn(usize) -> bool,
+    map: &[u32],
+    n: u32,
+    extra: &[Vec<u32>],
+) -> Arc<Pattern> {
     let m = |v: u32| node_dofs(map[v as usize]);
     let mut elems: Vec<Vec<u32>> = mesh
         .elements
         .iter()
         .enumerate()
-        .filter(|&(e, _)| mesh.parts[e] != Part::Rock)
+        .filter(|&(e, _)| live(e))
         .map(|(_, c)| c.iter().flat_map(|&v| m(v)).collect())
         .collect();
-    elems.extend(pairs.iter().map(|&[a, b]| [m(a), m(b)].concat()));
-    report(
-        "concrete",
-        Arc::new(Pattern::new(3 * n_ci as usize, &elems)),
-        Ordering::Metis,
-    )?;
-    elems.push(interface.iter().flat_map(|&v| m(v as u32)).collect());
-    println!(
-        "interface: {} nodes, {} dofs",
-        interface.len(),
-        3 * interface.len()
-    );
-    report(
-        "condensed",
-        Arc::new(Pattern::new(3 * n_ci as usize, &elems)),
-        Ordering::Metis,
-    )?;
-
-    // (c) the rock, interior first (METIS) and the interface last
-    let mut map = vec![u32::MAX; nn];
-    let mut n_r = 0u32;
-    for v in 0..nn {
-        if in_rock[v] && !in_conc[v] {
-            map[v] = n_r;
-            n_r += 1;
+    for p in &mesh.face_pairs {
+        for k in 0..4 {
+            let (a, b) = (p.nodes_a[k], p.nodes_b[k]);
+            if a != b && map[a as usize] != u32::MAX && map[b as usize] != u32::MAX {
+                elems.push([m(a), m(b)].concat());
+            }
         }
     }
-    let mut n_ri = n_r;
-    for &v in &interface {
-        map[v] = n_ri;
-        n_ri += 1;
-    }
-    let rock: Vec<Vec<u32>> = mesh
-        .elements
-        .iter()
-        .enumerate()
-        .filter(|&(e, _)| mesh.parts[e] == Part::Rock)
-        .map(|(_, c)| c.iter().flat_map(|&v| node_dofs(map[v as usize])).collect())
-        .collect();
-    let interior: Vec<Vec<u32>> = rock
-        .iter()
-        .map(|d| d.iter().copied().filter(|&x| x < 3 * n_r).collect())
-        .collect();
-    let mut perm = metis_nested_dissection(&Pattern::new(3 * n_r as usize, &interior))?;
-    perm.extend(3 * n_r..3 * n_ri);
-    report(
-        "rock",
-        Arc::new(Pattern::new(3 * n_ri as usize, &rock)),
-        Ordering::Custom(perm),
-    )?;
-    Ok(())
+    elems.extend(extra.iter().cloned());
+    Arc::new(Pattern::new(3 * n as usize, &elems))
 }
 
-/// Rock elements by the elevation of their centres (printed by `main`).
-pub fn rock_layers(mesh: &groutready::mesh::Mesh) {
+/// Numbers the nodes `keep` in increasing order; returns the map and count.
+fn number(keep: impl Fn(usize) -> bool, nn: usize) -> (Vec<u32>, u32) {
+    let mut map = vec![u32::MAX; nn];
+    let mut n = 0u32;
+    for (v, slot) in map.iter_mut().enumerate() {
+        if keep(v) {
+            *slot = n;
+            n += 1;
+        }
+    }
+    (map, n)
+}
+
+fn report(name: &str, pattern: Arc<Pattern>, ord: Ordering) -> anyhow::Result<CholeskySolver> {
+    let t = Instant::now();
+    let s = CholeskySolver::with_options(pattern.clone(), &ord, faer::Par::Seq)?;
+    println!(
+        "{name:24} n={:8} nnz(A)={:10} nnz(L)={:11} flops={:8.2} Gflop (analysis {:.2} s)",
+        pattern.n_dofs(),
+        pattern.nnz(),
+        s.factor_nnz(),
+        s.factor_flops() / 1e9,
+        t.elapsed().as_secs_f64()
+    );
+    Ok(s)
+}
+
+/// Rock elements by the elevation of their centres.
+fn rock_layers(mesh: &Mesh) {
     let mut zs: Vec<i64> = Vec::new();
     for (e, conn) in mesh.elements.iter().enumerate() {
         if mesh.parts[e] == Part::Rock {
@@ -146,14 +100,130 @@ pub fn rock_layers(mesh: &groutready::mesh::Mesh) {
         }
     }
     zs.sort();
-    let mut i = 0;
-    while i < zs.len() {
-        let j = zs[i..].iter().take_while(|&&z| z == zs[i]).count();
+    for chunk in zs.chunk_by(|a, b| a == b) {
+        let z = chunk[0];
         println!(
-            "rock elements with centre in [{}, {}) m: {j}",
-            zs[i],
-            zs[i] + 50
+            "rock elements with centre in [{z}, {}) m: {}",
+            z + 50,
+            chunk.len()
         );
-        i += j;
     }
+}
+
+/// Part 2 of the module doc.
+fn condensation(mesh: &Mesh) -> anyhow::Result<()> {
+    let nn = mesh.nodes.len();
+    let (mut in_rock, mut in_conc) = (vec![false; nn], vec![false; nn]);
+    for (e, conn) in mesh.elements.iter().enumerate() {
+        let flag = match mesh.parts[e] {
+            Part::Rock => &mut in_rock,
+            Part::Concrete { .. } => &mut in_conc,
+        };
+        conn.iter().for_each(|&v| flag[v as usize] = true);
+    }
+    let all = |_: usize| true;
+    let concrete = |e: usize| mesh.parts[e] != Part::Rock;
+    let identity: Vec<u32> = (0..nn as u32).collect();
+    report(
+        "complete",
+        pattern(mesh, &all, &identity, nn as u32, &[]),
+        Ordering::Metis,
+    )?;
+
+    let (map, n_ci) = number(|v| in_conc[v], nn);
+    let interface: Vec<u32> = (0..nn as u32)
+        .filter(|&v| in_conc[v as usize] && in_rock[v as usize])
+        .collect();
+    report(
+        "concrete",
+        pattern(mesh, &concrete, &map, n_ci, &[]),
+        Ordering::Metis,
+    )?;
+    println!(
+        "interface: {} nodes, {} dofs",
+        interface.len(),
+        3 * interface.len()
+    );
+    let clique: Vec<u32> = interface
+        .iter()
+        .flat_map(|&v| node_dofs(map[v as usize]))
+        .collect();
+    report(
+        "concrete + condensed",
+        pattern(mesh, &concrete, &map, n_ci, &[clique]),
+        Ordering::Metis,
+    )?;
+
+    // the rock, interior first (METIS) and the interface last
+    let (mut map, n_r) = number(|v| in_rock[v] && !in_conc[v], nn);
+    for (k, &v) in interface.iter().enumerate() {
+        map[v as usize] = n_r + k as u32;
+    }
+    let n_ri = n_r + interface.len() as u32;
+    let rock = |e: usize| mesh.parts[e] == Part::Rock;
+    let mut perm = metis_nested_dissection(&interior_pattern(mesh, &map, n_r))?;
+    perm.extend(3 * n_r..3 * n_ri);
+    report(
+        "rock, interface last",
+        pattern(mesh, &rock, &map, n_ri, &[]),
+        Ordering::Custom(perm),
+    )?;
+    Ok(())
+}
+
+/// The rock elements' couplings among the rock's interior dofs (numbered
+/// below `3 n_r` by `map`).
+fn interior_pattern(mesh: &Mesh, map: &[u32], n_r: u32) -> Pattern {
+    let elems: Vec<Vec<u32>> = mesh
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|&(e, _)| mesh.parts[e] == Part::Rock)
+        .map(|(_, c)| {
+            c.iter()
+                .flat_map(|&v| node_dofs(map[v as usize]))
+                .filter(|&d| d < 3 * n_r)
+                .collect()
+        })
+        .collect();
+    Pattern::new(3 * n_r as usize, &elems)
+}
+
+/// Part 3 of the module doc.
+fn ordering_reuse(mesh: &Mesh) -> anyhow::Result<()> {
+    let nn = mesh.nodes.len();
+    let identity: Vec<u32> = (0..nn as u32).collect();
+    let t = Instant::now();
+    let complete = metis_nested_dissection(&pattern(mesh, &|_| true, &identity, nn as u32, &[]))?;
+    println!("complete: METIS {:.2} s", t.elapsed().as_secs_f64());
+    let (zmin, zmax) = (mesh.layer_z[0], mesh.crest_z);
+    for frac in [0.25, 0.5, 0.75, 1.0] {
+        let zcut = zmin + frac * (zmax - zmin);
+        let live = |e: usize| match mesh.parts[e] {
+            Part::Rock => true,
+            Part::Concrete { .. } => {
+                let c = &mesh.elements[e];
+                c.iter().map(|&v| mesh.nodes[v as usize][2]).sum::<f64>() / 8.0 < zcut
+            }
+        };
+        let mut node_live = vec![false; nn];
+        for e in (0..mesh.elements.len()).filter(|&e| live(e)) {
+            mesh.elements[e]
+                .iter()
+                .for_each(|&v| node_live[v as usize] = true);
+        }
+        let (map, n) = number(|v| node_live[v], nn);
+        let p = pattern(mesh, &live, &map, n, &[]);
+        println!("concrete below {zcut:.1} m:");
+        report("  its own METIS", p.clone(), Ordering::Metis)?;
+        let restricted: Vec<u32> = complete
+            .iter()
+            .filter_map(|&d| {
+                let m = map[d as usize / 3];
+                (m != u32::MAX).then(|| 3 * m + d % 3)
+            })
+            .collect();
+        report("  the complete order", p, Ordering::Custom(restricted))?;
+    }
+    Ok(())
 }

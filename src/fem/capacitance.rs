@@ -188,14 +188,24 @@ fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) ->
     b
 }
 
-/// How far [`Capacitance::solve_to`] refines, and from where.
-#[derive(Debug, Clone, Default, PartialEq)]
+/// How far [`Capacitance::solve`] refines, and from where.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Refine {
     /// residual relative to the right-hand side
     pub to: f64,
     /// an earlier solution of the same system to refine (the correction's
     /// own first solution when `None`)
     pub from: Option<Vec<f64>>,
+}
+
+impl Default for Refine {
+    /// To [`REFINE_TO`], from the correction's own solution.
+    fn default() -> Self {
+        Refine {
+            to: REFINE_TO,
+            from: None,
+        }
+    }
 }
 
 /// A corrected solution and its relative residual on the changed system.
@@ -474,6 +484,10 @@ impl Capacitance {
     /// constrained right-hand side, M the constrained matrix) and zero on
     /// the fixed rows, i.e. [`constrained_residual`]'s quantity (with the
     /// couplings' loads), without a second product with A.
+    /// `refine`: the residual to refine to (relative to the right-hand
+    /// side; [`REFINE_TO`] by default) and where from: the correction's
+    /// own first solution, or an earlier solution of the same system.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve(
         &mut self,
         solver: &CholeskySolver,
@@ -482,27 +496,7 @@ impl Capacitance {
         presc: &[f64],
         rhs: &[f64],
         couplings: &[Coupling],
-    ) -> Result<Corrected, SolveError> {
-        let target = Refine {
-            to: REFINE_TO,
-            from: None,
-        };
-        self.solve_to(solver, a, fixed, presc, rhs, couplings, target)
-    }
-
-    /// [`Capacitance::solve`] refined to the residual `target.to` (relative
-    /// to the right-hand side), from the correction's own first solution
-    /// or from `target.from`, an earlier solution of the same system.
-    #[allow(clippy::too_many_arguments)]
-    pub fn solve_to(
-        &mut self,
-        solver: &CholeskySolver,
-        a: &SparseSym,
-        fixed: &[bool],
-        presc: &[f64],
-        rhs: &[f64],
-        couplings: &[Coupling],
-        target: Refine,
+        refine: Refine,
     ) -> Result<Corrected, SolveError> {
         let t = std::time::Instant::now();
         let n = a.n();
@@ -555,7 +549,7 @@ impl Capacitance {
             fixed,
             lu: s_factor.as_ref().and_then(|f| f.lu.as_ref()),
         };
-        let solved = self.refined(solver, &system, presc, rhs, target);
+        let solved = self.refined(solver, &system, presc, rhs, refine);
         self.s_factor = s_factor;
         let (x, norm) = solved?;
         let b_norm = constrained_rhs(a, fixed, presc, rhs)

@@ -676,7 +676,7 @@ impl ActiveSet {
         }
         let before = cap.stats;
         let loose = refine.to > REFINE_TO;
-        let corrected = cap.solve_to(
+        let corrected = cap.solve(
             &live.solver,
             &self.a_cur,
             &fixed,

@@ -566,7 +566,9 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
         m1.apply_dirichlet_with_rhs(&fixed, &presc, &mut rhs1);
         let x_ref = fresh_solution(&m1, &rhs1);
         let columns = cap.stats.columns;
-        let corrected = cap.solve(&solver, &a, &fixed, &presc, &rhs, &[]).unwrap();
+        let corrected = cap
+            .solve(&solver, &a, &fixed, &presc, &rhs, &[], Default::default())
+            .unwrap();
         let x = corrected.x;
         let (diff, scale) = max_difference(&x, &x_ref);
         let changed = cap.changes(&a, &fixed).len();
@@ -608,7 +610,7 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
                 to,
                 from: Some(from.to_vec()),
             };
-            cap.solve_to(&solver, &a, &fixed, &presc, &rhs, &[], refine)
+            cap.solve(&solver, &a, &fixed, &presc, &rhs, &[], refine)
                 .unwrap()
         };
         let mut start = x.clone();
@@ -688,7 +690,15 @@ fn capacitance_couplings_equal_the_coupled_system_solved_directly() {
             let x_ref = coupled_reference(&a, &fixed, &presc, load, coupled);
             let lus = cap.stats.s_factorisations;
             let corrected = cap
-                .solve(&solver, &a, &fixed, &presc, load, coupled)
+                .solve(
+                    &solver,
+                    &a,
+                    &fixed,
+                    &presc,
+                    load,
+                    coupled,
+                    Default::default(),
+                )
                 .unwrap();
             let (diff, scale) = max_difference(&corrected.x, &x_ref);
             eprintln!(
@@ -921,7 +931,9 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
             .iter()
             .filter(|c| c.1 == groutready::fem::RowChange::Diagonal)
             .count();
-        let corrected = cap.solve(&solver, &a1, &fixed, &presc, &rhs, &[]).unwrap();
+        let corrected = cap
+            .solve(&solver, &a1, &fixed, &presc, &rhs, &[], Default::default())
+            .unwrap();
         let (diff, x_scale) = max_difference(&corrected.x, &x_ref);
         eprintln!(
             "{name}: {} changed rows ({diagonal} springs), max difference {:.2e} of {x_scale:.3e}, residual {:.2e}",
@@ -942,7 +954,9 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
     // a diagonal change shares the column of the row fixed at the same dof
     let fixed: Vec<bool> = (0..n).map(|i| base[i] || i % 6 == 3).collect();
     let before = cap.stats.columns;
-    let _ = cap.solve(&solver, &a1, &fixed, &presc, &rhs, &[]).unwrap();
+    let _ = cap
+        .solve(&solver, &a1, &fixed, &presc, &rhs, &[], Default::default())
+        .unwrap();
     let spring_rows_base_free = (0..n).filter(|&i| i % 6 == 3 && !base[i]).count();
     assert!(spring_rows_base_free > 0);
     assert!(
@@ -973,7 +987,15 @@ fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
         let x_ref = fresh_solution(&m1, &rhs1);
         let lus = cap.stats.s_factorisations;
         let corrected = cap
-            .solve(&solver, matrix, &fixed, &presc, load, &[])
+            .solve(
+                &solver,
+                matrix,
+                &fixed,
+                &presc,
+                load,
+                &[],
+                Default::default(),
+            )
             .unwrap();
         let (diff, x_scale) = max_difference(&corrected.x, &x_ref);
         assert!(
