@@ -282,15 +282,13 @@ pub(super) fn reach_size(
     })
 }
 
-/// Scratch of the reach solves of one factor: a dense vector kept zero
-/// between columns and the marks of the blocks visited; for a batch, each
-/// block's first row in the panel and the panel (rows of the union of the
-/// reaches, a row's columns side by side) with the product buffer.
+/// Scratch of the reach solves of one factor: the marks of the blocks
+/// visited, each block's first row in the panel and the panel (rows of the
+/// union of the reaches, a row's columns side by side) with the product
+/// buffer.
 #[derive(Debug, Default)]
 pub struct ReachWork {
-    x: Vec<f64>,
     mark: Vec<bool>,
-    reach: Vec<u32>,
     panel_row: Vec<u32>,
     panel: Vec<f64>,
     product: Vec<f64>,
@@ -301,11 +299,11 @@ pub struct ReachWork {
 /// column in scalar loops.
 pub const REACH_BATCH: usize = 32;
 
-/// [`forward_reach`] of several columns at once (each its entries: row in
-/// the permuted numbering, value), on the union of their reaches; each
-/// column is returned on its own reach. A block of the union outside a
-/// column's reach receives no update from it, so the column is exactly
-/// zero there and equal to its single solve up to the order of the sums
+/// L⁻¹ u of several columns at once (each its entries: row in the permuted
+/// numbering, value), on the union of their reaches (see the module doc);
+/// each column is returned on its own reach. A block of the union outside
+/// a column's reach receives no update from it, so the column is exactly
+/// zero there and equal to its solve alone up to the order of the sums
 /// (`tests/it/fem_sparse.rs`).
 pub(super) fn forward_reach_many(
     symbolic: &SymbolicCholesky<u32>,
@@ -391,64 +389,13 @@ pub(super) fn forward_reach_many(
         .map(|(c, reach)| {
             let mut out = ReachColumn::default();
             for &b in reach {
-                let (start, w, _, _) = block_shape(symbolic, b as usize);
-                out.spans.push((start as u32, w as u32));
+                let blk = block(symbolic, values, b as usize);
+                out.spans.push((blk.start as u32, blk.width as u32));
                 let first = panel_row[b as usize] as usize;
                 out.values
-                    .extend((first..first + w).map(|r| panel[r * k + c]));
+                    .extend((first..first + blk.width).map(|r| panel[r * k + c]));
             }
             out
         })
         .collect()
-}
-
-/// L⁻¹ u for `entries` (row in the permuted numbering, value), on the reach
-/// of the entries only (see the module doc).
-pub(super) fn forward_reach(
-    symbolic: &SymbolicCholesky<u32>,
-    values: &[f64],
-    tree: &BlockTree,
-    entries: impl Iterator<Item = (usize, f64)>,
-    work: &mut ReachWork,
-) -> ReachColumn {
-    let n = symbolic.nrows();
-    if work.x.len() != n || work.mark.len() != tree.n_blocks() {
-        work.x = vec![0.0; n];
-        work.mark = vec![false; tree.n_blocks()];
-    }
-    let (x, mark, reach) = (&mut work.x, &mut work.mark, &mut work.reach);
-    reach.clear();
-    for (row, v) in entries {
-        x[row] += v;
-        tree.mark_path(row, mark, reach);
-    }
-    reach.sort_unstable();
-    for &b in reach.iter() {
-        let blk = block(symbolic, values, b as usize);
-        let h = blk.width + blk.below.len();
-        for j in 0..blk.width {
-            let col = &blk.values[j * h..(j + 1) * h];
-            let xj = x[blk.start + j] / col[j];
-            x[blk.start + j] = xj;
-            if xj == 0.0 {
-                continue;
-            }
-            for (i, l) in col[j + 1..blk.width].iter().enumerate() {
-                x[blk.start + j + 1 + i] -= l * xj;
-            }
-            for (&row, l) in blk.below.iter().zip(&col[blk.width..]) {
-                x[row as usize] -= l * xj;
-            }
-        }
-    }
-    let mut out = ReachColumn::default();
-    for &b in reach.iter() {
-        let blk = block(symbolic, values, b as usize);
-        let rows = blk.start..blk.start + blk.width;
-        out.spans.push((blk.start as u32, blk.width as u32));
-        out.values.extend_from_slice(&x[rows.clone()]);
-        x[rows].fill(0.0);
-        mark[b as usize] = false;
-    }
-    out
 }

@@ -27,7 +27,7 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
 use super::half_solves::{
-    forward_reach, forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
+    forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
 };
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::sparse::{Pattern, SparseSym};
@@ -501,37 +501,14 @@ impl CholeskySolver {
     }
 
     /// L⁻¹ P u for a `u` given by its entries (unknown, value), computed on
-    /// the reach of the entries only.
+    /// the reach of the entries only (a batch of one).
     pub fn forward_reach(
         &self,
         entries: &[(usize, f64)],
         work: &mut ReachWork,
     ) -> Result<ReachColumn, SolveError> {
-        if !self.factorized {
-            return Err(SolveError::NotFactorized);
-        }
-        let n = self.n();
-        if let Some(&(i, _)) = entries.iter().find(|&&(i, v)| i >= n || !v.is_finite()) {
-            return Err(SolveError::NonFinite {
-                what: "reach right-hand side",
-                index: i,
-            });
-        }
-        let t = Instant::now();
-        let rows = entries.iter().map(|&(i, v)| (self.permuted_row(i), v));
-        let y = forward_reach(&self.symbolic, &self.l_values, &self.tree, rows, work);
-        let seconds = t.elapsed().as_secs_f64();
-        self.record(|s| {
-            s.n_reach_columns += 1;
-            s.reach_seconds += seconds;
-        });
-        if !y.is_finite() {
-            return Err(SolveError::NonFinite {
-                what: "reach solution",
-                index: 0,
-            });
-        }
-        Ok(y)
+        let mut ys = self.forward_reach_many(&[entries.to_vec()], work)?;
+        Ok(ys.pop().unwrap_or_default())
     }
 
     /// [`CholeskySolver::forward_reach`] of several right-hand sides at
