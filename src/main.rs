@@ -141,7 +141,8 @@ enum StudyCommand {
         presets_only: bool,
         /// Only the scene as given and the settings of these knobs (comma
         /// separated: steps, multi-rate, capacity, theta, thermal solver,
-        /// mechanics step, across, along, layers, preset), against the
+        /// mechanics step, element, rock coarsening, across, along, layers,
+        /// preset), against the
         /// default reference: one knob's ladder in a fraction of the time.
         #[arg(long, value_delimiter = ',')]
         knobs: Vec<String>,

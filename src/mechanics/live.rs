@@ -16,6 +16,12 @@
 //! Dirichlet rows, no penalty. The row of d is the equilibrium of the pair:
 //! (K̃ ũ − f̃)_d = change of the contact force on side B in the local frame.
 //!
+//! Tied rock nodes ([`super::rock_ties`], `solver.rock_coarsening`) enter
+//! the same T: a tied node has no unknowns of its own, u_s = (1 − w) ũ_lo +
+//! w ũ_hi, so an element with one takes its masters' unknowns instead.
+//! T then drops columns (the tied rows), and K̃ = Tᵀ K T is the stiffness on
+//! that subspace.
+//!
 //! Each live set is analysed (faer's symbolic Cholesky) in an elimination
 //! order chosen by [`OrderingPlan`]. The default computes METIS's nested
 //! dissection once, on the complete dam ([`ConstructionOrdering`]), and
@@ -40,6 +46,7 @@ use crate::fem::{
 };
 
 use super::joints::JointPoint;
+use super::rock_ties::{RockTies, Tie};
 
 /// Marks a dof without an unknown.
 pub const NONE: u32 = u32::MAX;
@@ -53,12 +60,26 @@ pub const PARALLEL_FROM_DOFS: usize = 30_000;
 #[derive(Debug, Clone)]
 pub struct LiveElement {
     pub elem: u32,
-    /// reduced dofs of the element's local columns
+    /// reduced dofs of the element's local columns, three per column block
     pub dofs: Vec<u32>,
-    /// for each of the 8 nodes that is side b of a live pair: (node k, pair slot)
-    pub b_nodes: Vec<(u8, u32)>,
-    /// Tᵀ K̂ T of the unit-modulus stiffness when `b_nodes` is not empty
+    /// the element's T block by block; None when it is the identity (node
+    /// k's displacement is column block k)
+    pub terms: Option<Box<[Term]>>,
+    /// Tᵀ K̂ T of the unit-modulus stiffness when `terms` is not None
     pub k_unit: Option<DMatrix<f64>>,
+}
+
+/// One 3 × 3 block of an element's T: the displacement of the element's
+/// node `node` takes the column block `col` (reduced dofs `dofs[3 col..3 col
+/// + 3]`)
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Term {
+    /// times `weight`: a node's own unknowns (1), or a tied node's master's
+    /// ([`Tie::masters`]);
+    Scaled { node: u8, col: u8, weight: f64 },
+    /// through the axes of the live pair `pair` (u_b = ũ_a + Rᵀ d: the
+    /// pair's relative unknowns).
+    Axes { node: u8, col: u8, pair: u32 },
 }
 
 /// A live pair: its joint point and the first of its three reduced dofs (t1, t2, n).
@@ -85,6 +106,8 @@ pub struct LiveSystem {
     pub supported: Vec<bool>,
     /// global node dofs that own a reduced dof: (global dof, reduced dof)
     pub node_dofs: Vec<(u32, u32)>,
+    /// the tied nodes of the live elements, by node
+    pub tied: Vec<(u32, Tie)>,
     /// what choosing the elimination order of this set cost
     pub ordering: OrderingCost,
 }
@@ -112,12 +135,13 @@ pub enum LiveError {
 }
 
 /// The elements a live system is numbered from: connectivity, which are
-/// live, and the unit-modulus stiffness of each.
+/// live, the unit-modulus stiffness of each, and the tied rock nodes.
 #[derive(Clone, Copy)]
 pub struct ElementSet<'a> {
     pub conn: &'a [[u32; 8]],
     pub live: &'a [bool],
     pub k_unit: &'a [Mat24],
+    pub ties: &'a RockTies,
 }
 
 impl LiveSystem {
@@ -129,6 +153,7 @@ impl LiveSystem {
             conn: &[],
             live: &[],
             k_unit: &[],
+            ties: &RockTies::none(),
         };
         LiveSystem::build(none, points, &no_pair, &[], n_nodes, &OrderingPlan::Amd)
     }
@@ -169,14 +194,15 @@ impl LiveSystem {
             pair_of_b,
             slot_of_point,
             elements: numbered_elements,
+            tied,
             ..
         } = numbered;
         let supported_r = reduced_supports(n, &node_dofs, &pairs, points, supported)?;
         let live_elements = numbered_elements
             .into_iter()
             .map(|el| {
-                let k_unit = (!el.b_nodes.is_empty()).then(|| {
-                    let t = transform(&el.b_nodes, &pairs, points);
+                let k_unit = el.terms.as_ref().map(|terms| {
+                    let t = transform(terms, el.dofs.len(), &pairs, points);
                     let k = k_unit[el.elem as usize].as_slice();
                     t.transpose() * DMatrix::from_column_slice(24, 24, k) * &t
                 });
@@ -194,6 +220,7 @@ impl LiveSystem {
             solver,
             supported: supported_r,
             node_dofs,
+            tied,
             ordering: OrderingCost {
                 metis_calls,
                 seconds: ordering_seconds,
@@ -210,21 +237,23 @@ impl LiveSystem {
         out: &mut [f64],
     ) {
         let el = &self.elements[slot];
-        let mut col = 0;
-        for k in 0..8 {
-            let fk = [f[3 * k], f[3 * k + 1], f[3 * k + 2]];
-            for c in 0..3 {
-                out[el.dofs[col + c] as usize] += fk[c];
+        let Some(terms) = &el.terms else {
+            for (&d, &v) in el.dofs.iter().zip(f) {
+                out[d as usize] += v;
             }
-            col += 3;
-            if let Some(&(_, pair)) = el.b_nodes.iter().find(|(kk, _)| *kk as usize == k) {
-                let local = points[self.pairs[pair as usize].point as usize]
+            return;
+        };
+        for term in terms.iter() {
+            let (node, col) = term.blocks();
+            let fk = [f[3 * node], f[3 * node + 1], f[3 * node + 2]];
+            let add = match *term {
+                Term::Scaled { weight, .. } => fk.map(|v| weight * v),
+                Term::Axes { pair, .. } => points[self.pairs[pair as usize].point as usize]
                     .frame
-                    .to_local(fk);
-                for j in 0..3 {
-                    out[el.dofs[col + j] as usize] += local[j];
-                }
-                col += 3;
+                    .to_local(fk),
+            };
+            for j in 0..3 {
+                out[el.dofs[3 * col + j] as usize] += add[j];
             }
         }
     }
@@ -245,6 +274,13 @@ impl LiveSystem {
                 out[pair.first as usize + c] += local[c];
             }
         }
+        for &(s, tie) in &self.tied {
+            for (m, w) in tie.masters() {
+                for c in 0..3 {
+                    out[self.index_of[3 * m as usize + c] as usize] += w * g[3 * s as usize + c];
+                }
+            }
+        }
         out
     }
 
@@ -261,6 +297,41 @@ impl LiveSystem {
             for c in 0..3 {
                 out[3 * pt.b as usize + c] =
                     x[self.index_of[3 * pt.a as usize + c] as usize] + rel[c];
+            }
+        }
+        for &(s, tie) in &self.tied {
+            for c in 0..3 {
+                out[3 * s as usize + c] = tie
+                    .masters()
+                    .iter()
+                    .map(|&(m, w)| w * x[self.index_of[3 * m as usize + c] as usize])
+                    .sum();
+            }
+        }
+    }
+
+    /// Folds a vector over the global node dofs onto the kept nodes: each
+    /// tied node's entries go to its masters by their weights (Tᵀ on the
+    /// tied rows) and are zeroed; a residual of the live system is then
+    /// read node by node.
+    pub fn fold_tied(&self, g: &mut [f64]) {
+        for &(s, tie) in &self.tied {
+            for c in 0..3 {
+                let v = std::mem::take(&mut g[3 * s as usize + c]);
+                for (m, w) in tie.masters() {
+                    g[3 * m as usize + c] += w * v;
+                }
+            }
+        }
+    }
+}
+
+impl Term {
+    /// The element node and the column block of the term.
+    fn blocks(&self) -> (usize, usize) {
+        match *self {
+            Term::Scaled { node, col, .. } | Term::Axes { node, col, .. } => {
+                (node as usize, col as usize)
             }
         }
     }
@@ -281,6 +352,8 @@ pub struct Numbered {
     pub slot_of_point: Vec<u32>,
     /// the live elements, their stiffness not yet transformed (`k_unit` none)
     pub elements: Vec<LiveElement>,
+    /// the tied nodes of the live elements, by node
+    pub tied: Vec<(u32, Tie)>,
 }
 
 impl Numbered {
@@ -303,17 +376,30 @@ impl Numbered {
             n: 0,
         };
         let mut live_elements = Vec::new();
+        let mut tied = Vec::new();
         for (e, conn) in elements.conn.iter().enumerate() {
             if elements.live[e] {
-                let (dofs, b_nodes) = numbering.element(conn, &pair_of_b, &mut pairs, points);
+                let links = Links {
+                    pair_of_b: &pair_of_b,
+                    points,
+                    ties: elements.ties,
+                    n_nodes: n_nodes as u32,
+                };
+                let (dofs, terms) = numbering.element(conn, &links, &mut pairs);
+                tied.extend(
+                    conn.iter()
+                        .filter_map(|&v| elements.ties.of(v).map(|t| (v, t))),
+                );
                 live_elements.push(LiveElement {
                     elem: e as u32,
                     dofs,
-                    b_nodes,
+                    terms,
                     k_unit: None,
                 });
             }
         }
+        tied.sort_unstable_by_key(|&(v, _)| v);
+        tied.dedup_by_key(|&mut (v, _)| v);
         // A pair whose a node belongs to no live element (cannot happen for
         // live pairs, whose nodes are born with their elements) keeps NONE.
         Ok(Numbered {
@@ -324,6 +410,7 @@ impl Numbered {
             pair_of_b,
             slot_of_point,
             elements: live_elements,
+            tied,
         })
     }
 
@@ -389,11 +476,13 @@ pub struct ConstructionOrdering {
 }
 
 impl ConstructionOrdering {
-    /// METIS on the complete dam of `conn` with all of `points` paired.
+    /// METIS on the complete dam of `conn` with all of `points` paired and
+    /// the nodes `ties` ties tied.
     pub fn new(
         conn: &[[u32; 8]],
         points: &[JointPoint],
         n_nodes: usize,
+        ties: &RockTies,
     ) -> Result<ConstructionOrdering, LiveError> {
         let t = Instant::now();
         let mut point_of_b = vec![NONE; n_nodes];
@@ -413,6 +502,7 @@ impl ConstructionOrdering {
             conn,
             live: &all,
             k_unit: &[],
+            ties,
         };
         let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
         let fwd = metis_nested_dissection(&complete.pattern())?;
@@ -504,40 +594,100 @@ impl Numbering {
         self.index_of[g]
     }
 
+    /// The column block of node `v` among an element's `keys`, its dofs
+    /// numbered and pushed when new.
+    fn node_block(&mut self, keys: &mut Vec<u32>, v: u32, dofs: &mut Vec<u32>) -> u8 {
+        if let Some(col) = keys.iter().position(|&k| k == v) {
+            return col as u8;
+        }
+        keys.push(v);
+        for c in 0..3 {
+            dofs.push(self.node_dof(3 * v as usize + c));
+        }
+        (keys.len() - 1) as u8
+    }
+
     /// Numbers the unknowns of one live element: three per ordinary node;
     /// for a node on side b of a live pair, node a's three and the pair's
-    /// relative three. Returns the element's reduced dofs and its b nodes.
+    /// relative three; for a tied node, its two masters' three each. A node
+    /// met twice (a master of two tied nodes, or one of the element's own
+    /// nodes) is one column block. Returns the element's reduced dofs and
+    /// its T's terms (None: the identity).
     fn element(
         &mut self,
         conn: &[u32; 8],
-        pair_of_b: &[u32],
+        links: &Links,
         pairs: &mut [LivePair],
-        points: &[JointPoint],
-    ) -> (Vec<u32>, Vec<(u8, u32)>) {
+    ) -> (Vec<u32>, Option<Box<[Term]>>) {
         let mut dofs = Vec::with_capacity(24);
-        let mut b_nodes = Vec::new();
+        // key of each column block: a node, or n_nodes + pair slot
+        let mut keys: Vec<u32> = Vec::with_capacity(8);
+        let mut terms = Vec::with_capacity(8);
+        let mut plain = true;
         for (k, &node) in conn.iter().enumerate() {
-            let slot = pair_of_b[node as usize];
-            if slot == NONE {
-                for c in 0..3 {
-                    dofs.push(self.node_dof(3 * node as usize + c));
+            let k = k as u8;
+            if let Some(tie) = links.ties.of(node) {
+                plain = false;
+                for (m, weight) in tie.masters() {
+                    let col = self.node_block(&mut keys, m, &mut dofs);
+                    terms.push(Term::Scaled {
+                        node: k,
+                        col,
+                        weight,
+                    });
                 }
-            } else {
-                let a = points[pairs[slot as usize].point as usize].a as usize;
-                for c in 0..3 {
-                    dofs.push(self.node_dof(3 * a + c));
-                }
-                let pair = &mut pairs[slot as usize];
-                if pair.first == NONE {
-                    pair.first = self.n;
-                    self.n += 3;
-                }
-                dofs.extend(pair.first..pair.first + 3);
-                b_nodes.push((k as u8, slot));
+                continue;
             }
+            let slot = links.pair_of_b[node as usize];
+            if slot == NONE {
+                let col = self.node_block(&mut keys, node, &mut dofs);
+                terms.push(Term::Scaled {
+                    node: k,
+                    col,
+                    weight: 1.0,
+                });
+                continue;
+            }
+            plain = false;
+            let a = links.points[pairs[slot as usize].point as usize].a;
+            let col = self.node_block(&mut keys, a, &mut dofs);
+            terms.push(Term::Scaled {
+                node: k,
+                col,
+                weight: 1.0,
+            });
+            let pair = &mut pairs[slot as usize];
+            if pair.first == NONE {
+                pair.first = self.n;
+                self.n += 3;
+            }
+            let first = pair.first;
+            let key = links.n_nodes + slot;
+            let col = match keys.iter().position(|&k| k == key) {
+                Some(col) => col as u8,
+                None => {
+                    keys.push(key);
+                    dofs.extend(first..first + 3);
+                    (keys.len() - 1) as u8
+                }
+            };
+            terms.push(Term::Axes {
+                node: k,
+                col,
+                pair: slot,
+            });
         }
-        (dofs, b_nodes)
+        (dofs, (!plain).then(|| terms.into_boxed_slice()))
     }
+}
+
+/// What a node of a live element may be besides itself: side b of a live
+/// pair, or tied.
+struct Links<'a> {
+    pair_of_b: &'a [u32],
+    points: &'a [JointPoint],
+    ties: &'a RockTies,
+    n_nodes: u32,
 }
 
 /// Supported reduced dofs: those of supported node dofs, and the relative
@@ -573,27 +723,27 @@ fn reduced_supports(
     Ok(supported_r)
 }
 
-/// T of one element: 24 rows (global node dofs), one column per element
-/// unknown (3 per ordinary node, 6 for a node on side b of a pair).
-fn transform(b_nodes: &[(u8, u32)], pairs: &[LivePair], points: &[JointPoint]) -> DMatrix<f64> {
-    let m = 24 + 3 * b_nodes.len();
+/// T of one element: 24 rows (global node dofs), `m` columns (its reduced
+/// dofs), block by block from its terms.
+fn transform(terms: &[Term], m: usize, pairs: &[LivePair], points: &[JointPoint]) -> DMatrix<f64> {
     let mut t = DMatrix::zeros(24, m);
-    let mut col = 0;
-    for k in 0..8 {
-        for c in 0..3 {
-            t[(3 * k + c, col + c)] = 1.0;
-        }
-        col += 3;
-        if let Some(&(_, slot)) = b_nodes.iter().find(|(kk, _)| *kk as usize == k) {
-            let frame = &points[pairs[slot as usize].point as usize].frame;
-            let axes = [frame.t1, frame.t2, frame.n];
-            // u_b[c] = ũ_a[c] + Σ_j axes[j][c] d_j
-            for (j, axis) in axes.iter().enumerate() {
+    for term in terms {
+        let (node, col) = term.blocks();
+        match *term {
+            Term::Scaled { weight, .. } => {
                 for c in 0..3 {
-                    t[(3 * k + c, col + j)] = axis[c];
+                    t[(3 * node + c, 3 * col + c)] += weight;
                 }
             }
-            col += 3;
+            Term::Axes { pair, .. } => {
+                let frame = &points[pairs[pair as usize].point as usize].frame;
+                // u_b[c] = ũ_a[c] + Σ_j axes[j][c] d_j
+                for (j, axis) in [frame.t1, frame.t2, frame.n].iter().enumerate() {
+                    for c in 0..3 {
+                        t[(3 * node + c, 3 * col + j)] = axis[c];
+                    }
+                }
+            }
         }
     }
     t

@@ -23,6 +23,7 @@ use super::contact_step::{
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
 use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
+use super::rock_ties::RockTies;
 use super::settings::{JointMechanics, MechanicsSettings};
 
 /// Gravity [m/s²].
@@ -249,6 +250,8 @@ pub struct MechanicsModel {
     /// a restored state's [`MechState::next_factor_guess`], for the first
     /// step after the restore
     restored_guess: Option<FactorGuess>,
+    /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
+    ties: RockTies,
 }
 
 /// Per-element constants of the mechanical problem, computed once.
@@ -389,11 +392,28 @@ impl MechanicsModel {
         settings: &MechanicsSettings,
         supports: &Supports,
     ) -> Result<MechanicsModel, MechError> {
-        let tables = ElementTables::new(mesh, settings)?;
         let mut supported = vec![false; 3 * mesh.nodes.len()];
         for &(node, comp) in &supports.fixed {
             supported[3 * node as usize + comp as usize] = true;
         }
+        let ties = RockTies::build(
+            &mesh.elements,
+            &mesh.parts,
+            &mesh.nodes,
+            &supported,
+            settings.rock_coarsening,
+        );
+        // the mechanics' rock is the tied one, its tied nodes on their chords
+        let straightened;
+        let mesh = if ties.count() > 0 {
+            let mut m = mesh.clone();
+            ties.straighten(&mut m.nodes);
+            straightened = m;
+            &straightened
+        } else {
+            mesh
+        };
+        let tables = ElementTables::new(mesh, settings)?;
         let points = if settings.joints {
             build_points(mesh).map_err(|source| MechError::Contact { day: 0.0, source })?
         } else {
@@ -407,7 +427,7 @@ impl MechanicsModel {
             OrderingKind::Amd => OrderingPlan::Amd,
             OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
             OrderingKind::Metis => {
-                let c = ConstructionOrdering::new(&mesh.elements, &points, mesh.nodes.len())
+                let c = ConstructionOrdering::new(&mesh.elements, &points, mesh.nodes.len(), &ties)
                     .map_err(|source| MechError::Live { day: 0.0, source })?;
                 stats.metis_calls += 1;
                 stats.seconds_ordering += c.seconds;
@@ -447,6 +467,7 @@ impl MechanicsModel {
             points,
             ahead: FactorAhead::new(factor_ahead(settings)),
             restored_guess: None,
+            ties,
         })
     }
 
@@ -565,6 +586,7 @@ impl MechanicsModel {
             conn: &self.elements,
             live,
             k_unit: &self.tables.k_unit,
+            ties: &self.ties,
         };
         let sys = LiveSystem::build(
             elements,
@@ -1189,14 +1211,18 @@ impl MechanicsModel {
             }
         }
         let (mut r2, mut f2) = (0.0, 0.0);
-        for d in 0..fint.len() {
-            if !live[d] || self.supported[d] {
-                continue;
-            }
+        let mut r = vec![0.0; fint.len()];
+        for d in (0..fint.len()).filter(|&d| live[d]) {
             let f = self.state.f_ext[d] + self.state.f_contact[d];
-            let r = fint[d] - f;
-            r2 += r * r;
-            f2 += f * f;
+            r[d] = fint[d] - f;
+            if !self.supported[d] {
+                f2 += f * f;
+            }
+        }
+        // a tied node is in equilibrium only with its masters (Tᵀ r = 0)
+        sys.fold_tied(&mut r);
+        for d in (0..fint.len()).filter(|&d| live[d] && !self.supported[d]) {
+            r2 += r[d] * r[d];
         }
         (r2.sqrt(), f2.sqrt().max(scale).max(f64::MIN_POSITIVE))
     }

@@ -100,6 +100,10 @@ pub struct MechanicsSettings {
     /// Factorise each step's stiffness on the second core while the step
     /// before runs its contact passes (`solver.factor_ahead`).
     pub factor_ahead: bool,
+    /// Keep every N-th node level of the rock beside the dam and tie the
+    /// others to them (`solver.rock_coarsening`; 1: none;
+    /// [`super::rock_ties`]).
+    pub rock_coarsening: u32,
 }
 
 impl MechanicsSettings {
@@ -159,6 +163,7 @@ impl MechanicsSettings {
             ordering: scene.solver.ordering,
             element: scene.solver.element,
             factor_ahead: scene.solver.factor_ahead,
+            rock_coarsening: scene.solver.rock_coarsening,
         })
     }
 }

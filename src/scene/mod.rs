@@ -513,6 +513,19 @@ pub struct SolverSettings {
     /// written when true (restart fingerprints of older scenes).
     #[serde(skip_serializing_if = "is_true")]
     pub factor_ahead: bool,
+    /// Mechanics: keep every N-th node level of the rock beside the dam
+    /// (above the deepest foundation, beyond the first ring of rock
+    /// elements round the concrete) and tie the nodes between to them,
+    /// linearly along their vertical grid line
+    /// ([`crate::mechanics::rock_ties`]). 1 (default): the mesh's rock. An
+    /// approximation: its error and time are in `groutready study
+    /// accuracy`. Not written when 1 (restart fingerprints).
+    #[serde(skip_serializing_if = "is_one")]
+    pub rock_coarsening: u32,
+}
+
+fn is_one(v: &u32) -> bool {
+    *v == 1
 }
 
 fn is_true(v: &bool) -> bool {
@@ -595,6 +608,7 @@ impl Default for SolverSettings {
             ordering: OrderingKind::Metis,
             element: SolidElement::Hex8,
             factor_ahead: true,
+            rock_coarsening: 1,
         }
     }
 }
@@ -615,6 +629,12 @@ impl SolverSettings {
             return Err(Invalid::new(
                 "solver.pcg_max_iterations",
                 "solver.pcg_max_iterations must be >= 1, got 0",
+            ));
+        }
+        if self.rock_coarsening == 0 {
+            return Err(Invalid::new(
+                "solver.rock_coarsening",
+                "solver.rock_coarsening must be >= 1 (1: the mesh's rock), got 0",
             ));
         }
         if self.contact_max_iterations == 0 {

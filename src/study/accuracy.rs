@@ -739,7 +739,8 @@ fn scale_steps(scene: &mut Scene, k: f64) {
 
 /// The default ladder of `scene`: the scene as given; the thermal steps
 /// ×2, ×½, ×¼; the multi-rate schedule; the other capacity form;
-/// Crank–Nicolson; PCG at 1e-10; mechanical steps up to 3 days; elements
+/// Crank–Nicolson; PCG at 1e-10; mechanical steps up to 3 days; the other
+/// solid element; the rock beside an arch tied every 4th level; elements
 /// across ×½ (when even) and ×2, along ×2, layers per lift ×2 (blocks);
 /// the presets. The reference: elements along and across ×2, steps ×¼ and
 /// consistent capacity.
@@ -781,6 +782,16 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         l.push(other_form(name, "element", element, |s, e| {
             s.solver.element = e
         }));
+        // the blocks generator founds every block on one level: no rock
+        // beside the dam to tie
+        if !matches!(scene.geometry, Geometry::Blocks(_)) && scene.solver.rock_coarsening == 1 {
+            l.push(Setting::new(
+                "rock ties 1 in 4",
+                "rock coarsening",
+                None,
+                |s| s.solver.rock_coarsening = 4,
+            ));
+        }
     }
     let mut probe = scene.clone();
     let blocks = refine_mesh(&mut probe, 1.0, 1.0, 2);

@@ -37,6 +37,7 @@ mod planner_together;
 mod report_files;
 mod reproducible;
 mod restart;
+mod rock_ties;
 mod scene_errors;
 mod schedule_errors;
 mod study_accuracy;
