@@ -453,3 +453,12 @@ fn grout_stop_inset_must_be_a_distance() {
         );
     }
 }
+
+#[test]
+fn rock_coarsening_must_be_at_least_one() {
+    let text = format!("{BASE}\n[solver]\nrock_coarsening = 0\n");
+    assert_eq!(
+        err(&text),
+        "models/x.toml:46:19: solver.rock_coarsening must be >= 1 (1: the mesh's rock), got 0"
+    );
+}
