@@ -34,14 +34,7 @@ impl PlanOptions {
         let last = self
             .horizon_days
             .map(|h| self.as_of + chrono::Duration::days(h as i64));
-        let mut rows: Vec<(NaiveDate, ZoneId)> = s
-            .grouting
-            .iter()
-            .filter(|g| last.is_none_or(|l| g.planned <= l))
-            .map(|g| (g.planned, g.zone_id()))
-            .collect();
-        rows.sort();
-        rows
+        s.grouting_by_date(last)
     }
 
     /// The day the plan's baseline ends: the last zone it covers is due,
@@ -206,11 +199,8 @@ pub fn judge_planned(
     let rules = Rules::new(&scene.planner, &layout, mesh, scene.epoch, schedules);
     let grout = grout_days(&rules, schedules);
     let idx = HistoryIndex::new(history);
-    let all = PlanOptions {
-        as_of: scene.epoch.0,
-        horizon_days: None,
-    };
-    all.zones(schedules)
+    schedules
+        .grouting_by_date(None)
         .into_iter()
         .map(|(date, zone)| (scene.epoch.day(date), zone))
         .filter(|&(day, _)| day <= end)

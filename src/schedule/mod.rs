@@ -296,6 +296,19 @@ impl Schedules {
             .find(|p| p.block == block && p.lift == lift)
     }
 
+    /// The zones of `grouting.csv` by planned date (then zone), those
+    /// planned on or before `last` when given.
+    pub fn grouting_by_date(&self, last: Option<NaiveDate>) -> Vec<(NaiveDate, ZoneId)> {
+        let mut rows: Vec<(NaiveDate, ZoneId)> = self
+            .grouting
+            .iter()
+            .filter(|g| last.is_none_or(|l| g.planned <= l))
+            .map(|g| (g.planned, g.zone_id()))
+            .collect();
+        rows.sort();
+        rows
+    }
+
     /// The grouting plan of `zone` of `joint`, if any (linear search).
     pub fn grouting_of(&self, zone: ZoneId) -> Option<&GroutingPlan> {
         self.grouting.iter().find(|g| g.zone_id() == zone)
