@@ -168,6 +168,16 @@ pub struct MechStats {
     pub ahead: AheadStats,
 }
 
+impl MechStats {
+    /// Counts `n` numeric factorisations of `flops_each` flops that took
+    /// `seconds` on this thread (0 for those made ahead on the other core).
+    fn count_numeric(&mut self, n: usize, flops_each: f64, seconds: f64) {
+        self.numeric += n;
+        self.numeric_flops += n as f64 * flops_each;
+        self.seconds_numeric += seconds;
+    }
+}
+
 /// Checkpointable mechanical state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MechState {
@@ -494,8 +504,7 @@ impl MechanicsModel {
     /// Waits for the factorisation running ahead, if any, and counts it.
     fn settle_ahead(&mut self) {
         if let Some(flops) = self.ahead.settle() {
-            self.stats.numeric += 1;
-            self.stats.numeric_flops += flops;
+            self.stats.count_numeric(1, flops, 0.0);
         }
         self.stats.ahead = self.ahead.stats;
     }
@@ -896,9 +905,9 @@ impl MechanicsModel {
             .solver
             .factorize(&prepared.m)
             .map_err(|source| MechError::Solve { day: t1, source })?;
-        self.stats.seconds_numeric += t.elapsed().as_secs_f64();
-        self.stats.numeric += 1;
-        self.stats.numeric_flops += self.sys.solver.factor_flops();
+        let flops = self.sys.solver.factor_flops();
+        self.stats
+            .count_numeric(1, flops, t.elapsed().as_secs_f64());
         Ok(Some(prepared))
     }
 
@@ -1068,9 +1077,9 @@ impl MechanicsModel {
             prepared,
         )
         .map_err(|source| MechError::Joints { day, source })?;
-        self.stats.numeric += out.factorizations;
-        self.stats.numeric_flops += out.factorizations as f64 * self.sys.solver.factor_flops();
-        self.stats.seconds_numeric += out.seconds_numeric;
+        let flops = self.sys.solver.factor_flops();
+        self.stats
+            .count_numeric(out.factorizations, flops, out.seconds_numeric);
         self.stats.contact_iterations += out.iterations;
         self.stats.kept_closed_tension =
             self.stats.kept_closed_tension.max(out.kept_closed_tension);
@@ -1162,9 +1171,9 @@ impl MechanicsModel {
         sys.solver
             .factorize(&a)
             .map_err(|source| MechError::Solve { day, source })?;
-        self.stats.numeric += 1;
-        self.stats.numeric_flops += sys.solver.factor_flops();
-        self.stats.seconds_numeric += t_num.elapsed().as_secs_f64();
+        let flops = sys.solver.factor_flops();
+        self.stats
+            .count_numeric(1, flops, t_num.elapsed().as_secs_f64());
         let t_solve = Instant::now();
         let mut x = b.clone();
         sys.solver
