@@ -59,7 +59,7 @@ pub enum MechError {
         day: f64,
         source: crate::joint::ContactError,
     },
-    #[error("prescribed displacement on node {node} component {comp}: the dof is not supported, or is on side b of a joint")]
+    #[error("prescribed displacement on node {node} component {comp}: the dof is not supported, or is on side b of a joint, or is tied to its rock grid line (solver.rock_coarsening)")]
     NotSupported { node: u32, comp: u8 },
     #[error("joints on day {day:.3}: {source}")]
     Joints { day: f64, source: JointStepError },
