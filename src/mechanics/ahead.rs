@@ -411,7 +411,8 @@ impl FactorAhead {
     /// is taken). Not where the live system's factorisation already runs on
     /// both cores ([`PARALLEL_FROM_DOFS`]): on the Xiaowan-like arch's first
     /// 40 days (live sets of up to 152,871 dofs) factorising ahead took
-    /// 54.2 s against 53.4 s without, at a peak of 4.5 against 2.8 GB.
+    /// 54.2 s against 53.4 s without, at a peak of 4.5 against 2.8 GB (the
+    /// threshold was 30,000 dofs then).
     pub fn due(&mut self, live: &LiveSystem) -> Option<NextStep> {
         let next = self.next.take()?;
         (live.n < PARALLEL_FROM_DOFS && 8 * live.solver.factor_nnz() <= AHEAD_MAX_BYTES)

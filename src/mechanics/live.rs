@@ -52,9 +52,17 @@ use super::rock_ties::{RockTies, Tie};
 pub const NONE: u32 = u32::MAX;
 
 /// Live systems of this many dofs or more are factorised on both cores
-/// (faer's `Par::rayon`); smaller ones on one (on the demo's systems of up
-/// to 25,458 dofs two threads made the whole run slower: 221 against 165 s).
-pub const PARALLEL_FROM_DOFS: usize = 30_000;
+/// (faer's `Par::rayon`); smaller ones on one, and the next step's made
+/// ahead on the second core ([`super::ahead`]). On the demo's systems of up
+/// to 25,458 dofs two threads made the whole run slower (221 against
+/// 165 s). On the Xiaowan-like arch with the rock tied every 4th level
+/// (live sets of up to 80,760 dofs in its first 240 days) one core and the
+/// factor made ahead took 263.6 s against 361.2 s on both cores with a
+/// threshold of 30,000 (99.1 against 115.9 s over 120 days): the step's
+/// own work overlaps the factorisation. Larger sets (the untied arch from
+/// its first weeks, the complete dams) stay on both cores, unmeasured
+/// against one.
+pub const PARALLEL_FROM_DOFS: usize = 100_000;
 
 /// One element in the reduced unknowns.
 #[derive(Debug, Clone)]
