@@ -385,14 +385,14 @@ impl Numbered {
         };
         let mut live_elements = Vec::new();
         let mut tied = Vec::new();
+        let links = Links {
+            pair_of_b: &pair_of_b,
+            points,
+            ties: elements.ties,
+            n_nodes: n_nodes as u32,
+        };
         for (e, conn) in elements.conn.iter().enumerate() {
             if elements.live[e] {
-                let links = Links {
-                    pair_of_b: &pair_of_b,
-                    points,
-                    ties: elements.ties,
-                    n_nodes: n_nodes as u32,
-                };
                 let (dofs, terms) = numbering.element(conn, &links, &mut pairs);
                 tied.extend(
                     conn.iter()

@@ -76,6 +76,15 @@ pub struct Supports {
 }
 
 impl Supports {
+    /// Per node dof (3 per node of `n_nodes`): is it fixed?
+    pub fn flags(&self, n_nodes: usize) -> Vec<bool> {
+        let mut supported = vec![false; 3 * n_nodes];
+        for &(node, comp) in &self.fixed {
+            supported[3 * node as usize + comp as usize] = true;
+        }
+        supported
+    }
+
     /// All three components of every node on the far boundary of the model
     /// (rock bottom and sides; the base of a mesh without rock).
     pub fn far_boundary(mesh: &Mesh) -> Supports {
@@ -402,10 +411,7 @@ impl MechanicsModel {
         settings: &MechanicsSettings,
         supports: &Supports,
     ) -> Result<MechanicsModel, MechError> {
-        let mut supported = vec![false; 3 * mesh.nodes.len()];
-        for &(node, comp) in &supports.fixed {
-            supported[3 * node as usize + comp as usize] = true;
-        }
+        let supported = supports.flags(mesh.nodes.len());
         let ties = RockTies::build(
             &mesh.elements,
             &mesh.parts,

@@ -30,11 +30,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 #[test]
 fn ties_keep_the_concrete_its_ring_the_deep_rock_and_the_support_changes() {
     let (mesh, _) = demo();
-    let supports = Supports::far_boundary(&mesh);
-    let mut supported = vec![false; 3 * mesh.nodes.len()];
-    for &(n, c) in &supports.fixed {
-        supported[3 * n as usize + c as usize] = true;
-    }
+    let supported = Supports::far_boundary(&mesh).flags(mesh.nodes.len());
     assert_eq!(
         RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, 1).count(),
         0
@@ -152,10 +148,7 @@ fn a_free_expansion_is_linear_so_the_tied_rock_gives_it_exactly() {
     };
     let dt = 10.0;
     let xa = mesh.nodes[a as usize];
-    let mut supported = vec![false; 3 * mesh.nodes.len()];
-    fixed
-        .iter()
-        .for_each(|&(n, c)| supported[3 * n as usize + c as usize] = true);
+    let supported = supports.flags(mesh.nodes.len());
     for every in [1, 4] {
         settings.rock_coarsening = every;
         // the field at the mechanics' positions: tied nodes on their chords
@@ -208,11 +201,7 @@ fn the_tied_rock_is_a_ritz_subspace_a_little_stiffer_under_self_weight() {
     // both on the mesh the tie straightens (which it then leaves as it is),
     // so that the tied displacements are a subspace of the untied ones
     let tied_nodes = {
-        let mut s = vec![false; 3 * mesh.nodes.len()];
-        supports
-            .fixed
-            .iter()
-            .for_each(|&(n, c)| s[3 * n as usize + c as usize] = true);
+        let s = supports.flags(mesh.nodes.len());
         let ties = RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &s, 4);
         ties.straighten(&mut mesh.nodes);
         ties.count()
