@@ -34,6 +34,10 @@ enum Command {
         /// did not write (they are deleted).
         #[arg(long)]
         force: bool,
+        /// Start from day 0 even when an interrupted run into --out left a
+        /// restart point (`.NAME.resume`, which is then removed).
+        #[arg(long)]
+        from_scratch: bool,
     },
     /// Readiness of every grouting zone on its planned date, remedies for the
     /// zones that are not groutable, and a report (the weekly job).
@@ -265,7 +269,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             schedules,
             out,
             force,
-        } => run(scene, schedules, out, force),
+            from_scratch,
+        } => run(scene, schedules, out, force, from_scratch),
         Command::Plan {
             scene,
             args,
@@ -325,6 +330,7 @@ fn run(
     schedules: Option<PathBuf>,
     out: Option<PathBuf>,
     force: bool,
+    from_scratch: bool,
 ) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = out.unwrap_or_else(|| default_out(&scene));
@@ -340,9 +346,13 @@ fn run(
     );
     print_warnings(&inputs.warnings);
     let bar = groutready::progress::bar("simulating");
-    let summary = app::run(&inputs, &out, &mut |day, end| {
-        groutready::progress::update(&bar, day, end)
-    })
+    let summary = app::run(
+        &inputs,
+        &out,
+        from_scratch,
+        &mut |n| bar.suspend(|| eprintln!("note: {n}")),
+        &mut |day, end| groutready::progress::update(&bar, day, end),
+    )
     .with_context(|| format!("running {}", scene.display()))?;
     bar.finish_and_clear();
     print_warnings(&summary.stats.warnings);

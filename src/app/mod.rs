@@ -6,6 +6,7 @@ pub mod mesh_export;
 pub mod out;
 pub mod plan;
 pub mod restart;
+pub mod resume;
 
 use std::path::{Path, PathBuf};
 
@@ -161,32 +162,96 @@ pub struct RunSummary {
     /// the zones planned within the run, judged on their planned dates
     /// (a run with joints and a grouting schedule)
     pub grouting: Option<crate::report::GroutingDistribution>,
+    /// the date an interrupted run was continued from ([`resume`])
+    pub resumed_from: Option<chrono::NaiveDate>,
+}
+
+/// Simulates to the end, keeping a restart point at the checkpoints
+/// ([`resume::Resume::maybe_save`]) and only the latest checkpoint in
+/// memory; `written` collects the snapshots in `fields`.
+fn simulate(
+    inputs: &Inputs,
+    sim: &mut Simulation,
+    keep: &mut resume::Resume,
+    fields: &Path,
+    written: &mut Vec<(f64, String)>,
+    progress: &mut dyn FnMut(f64, f64),
+) -> Result<RunStats, AppError> {
+    let mesh = &inputs.mesh;
+    let end = sim.end_day().t();
+    let mut seconds = 0.0;
+    loop {
+        let seen = sim.checkpoints.last().map(|c| c.day);
+        let mut sink = |snap: &crate::sim::Snapshot| -> std::io::Result<()> {
+            let name = format!("fields_{}.vtu", snap.date);
+            let path = fields.join(&name);
+            output::snapshot::write(&path, mesh, snap)
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            written.push((snap.day.t(), name));
+            Ok(())
+        };
+        // returns at each new checkpoint's midnight
+        let mut stats = sim.run_until(Some(&mut sink), progress, &mut |_, s| {
+            s.checkpoints.last().map(|c| c.day) != seen
+        })?;
+        seconds += stats.seconds;
+        if sim.day >= end {
+            stats.seconds = seconds;
+            return Ok(stats);
+        }
+        // the next checkpoint's day counts from the last one only
+        let last = sim.checkpoints.len().saturating_sub(1);
+        sim.checkpoints.drain(..last);
+        let sim: &Simulation = sim;
+        if let Some(ck) = sim.checkpoints.last() {
+            keep.maybe_save(sim, &inputs.schedules, ck, fields, written)?;
+        }
+    }
 }
 
 /// Runs the simulation and writes the run folder `out` (checked and locked
-/// by [`OutDir::prepare`]) atomically.
+/// by [`OutDir::prepare`]) atomically. The run keeps a restart point beside
+/// the folder while it simulates and continues from one an interrupted run
+/// left, unless `from_scratch` ([`resume`]); `note` hears where it
+/// continues from and what it removed, before the simulation.
 pub fn run(
     inputs: &Inputs,
     out: &OutDir,
+    from_scratch: bool,
+    note: &mut dyn FnMut(&str),
     progress: &mut dyn FnMut(f64, f64),
 ) -> Result<RunSummary, AppError> {
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules)?;
+    sim.checkpoint_every = Some(i64::from(inputs.scene.planner.checkpoint_days));
     let dest = out.dest();
     let staging = RunDir::create(dest).map_err(io_err(dest))?;
     let fields = staging.path().join("fields");
     std::fs::create_dir_all(&fields).map_err(io_err(&fields))?;
+    let opened = resume::Resume::open(dest, &sim, &inputs.schedules, from_scratch)?;
+    let mut keep = opened.resume;
+    for n in &opened.notes {
+        note(n);
+    }
+    for w in &opened.damaged {
+        note(&format!("warning: {w}"));
+    }
     let mut written: Vec<(f64, String)> = Vec::new();
-    let mesh = &inputs.mesh;
-    let mut sink = |snap: &crate::sim::Snapshot| -> std::io::Result<()> {
-        let name = format!("fields_{}.vtu", snap.date);
-        let path = fields.join(&name);
-        output::snapshot::write(&path, mesh, snap)
-            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
-        written.push((snap.day.t(), name));
-        Ok(())
+    let resumed_from = match &opened.resumed {
+        Some(r) => {
+            note(&format!(
+                "continuing the interrupted run from {} (its restart point {})",
+                r.date,
+                resume::dir_of(dest).display()
+            ));
+            sim.restore(&r.restart.checkpoint, &r.restart.history);
+            keep.link_fields(r, &fields)?;
+            written.clone_from(&r.fields);
+            Some(r.date)
+        }
+        None => None,
     };
-    let stats = sim.run(Some(&mut sink), progress)?;
-
+    drop(opened.resumed);
+    let stats = simulate(inputs, &mut sim, &mut keep, &fields, &mut written, progress)?;
     let temps = staging.path().join("temperatures.csv");
     let temperature_rows = if sim.thermal.is_some() {
         output::temperatures::write(&temps, inputs.scene.epoch, &sim.records)
@@ -213,13 +278,20 @@ pub fn run(
     let grouting = grouting_distribution(inputs, &sim);
     let summary = staging.path().join("run.txt");
     let mut text = run_text(inputs, &stats);
+    if let Some(d) = resumed_from {
+        text += &format!(
+            "continued from the restart point of {d} (the figures above count this process only)\n"
+        );
+    }
     if let Some(g) = &grouting {
         text += &g.to_string();
     }
     std::fs::write(&summary, text).map_err(io_err(&summary))?;
     let snapshots = written.len();
     staging.commit().map_err(io_err(dest))?;
+    keep.remove()?;
     Ok(RunSummary {
+        resumed_from,
         out: out.path().to_path_buf(),
         stats,
         elements: inputs.mesh.elements.len(),

@@ -341,3 +341,128 @@ fn grouting_distribution_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
     assert_eq!(n.iter().sum::<usize>(), planned.len(), "{verdicts}");
     assert!(n[2] >= count(f64::MIN, 0.5), "{verdicts}");
 }
+
+/// Starts `groutready run SCENE --out OUT` and kills it (SIGKILL: no
+/// clean-up runs) once it has kept its first restart point.
+fn killed_after_first_restart_point(scene: &Path, out: &Path) {
+    let name = out.file_name().unwrap().to_string_lossy().into_owned();
+    let restart = out
+        .with_file_name(format!(".{name}.resume"))
+        .join("restart");
+    let mut child = bin()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let kept = || {
+        std::fs::read_dir(&restart).is_ok_and(|rd| {
+            rd.flatten()
+                .any(|e| e.file_name().to_string_lossy().starts_with("ck-"))
+        })
+    };
+    let start = std::time::Instant::now();
+    while !kept() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before keeping a restart point"
+        );
+        assert!(start.elapsed().as_secs() < 120, "no restart point kept");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!out.exists(), "a killed run wrote its run folder");
+}
+
+/// `groutready run SCENE` again into OUT (extra arguments `args`); returns
+/// its standard error.
+fn run_again(scene: &Path, out: &Path, args: &[&str]) -> String {
+    let o = bin()
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    err
+}
+
+/// A run killed on the way continues from its restart point when run
+/// again, and writes what a run from day 0 writes, byte for byte (the
+/// temperatures, the apertures with their states, every field file, those
+/// written before the restart point too); with `--from-scratch` it starts
+/// from day 0 and removes the restart point.
+#[test]
+fn a_killed_run_continues_from_its_restart_point() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo("models/small_dam_joints.toml"))
+        .unwrap()
+        .replace(
+            "../schedules/small_dam\"",
+            &format!("{}\"", repo("schedules/small_dam").display()),
+        )
+        .replace(
+            "snapshots = [2024-07-01]",
+            "snapshots = [2024-01-05, 2024-03-01, 2024-07-01]",
+        )
+        // the first restart point after months of histories and a snapshot
+        + "\n[planner]\ncheckpoint_days = 120\n";
+    let scene = tmp.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let runs = tmp.path().join("runs");
+    let (resumed, scratch) = (runs.join("resumed"), runs.join("scratch"));
+    killed_after_first_restart_point(&scene, &resumed);
+    let err = run_again(&scene, &resumed, &[]);
+    assert!(
+        err.contains("continuing the interrupted run from 2024-"),
+        "{err}"
+    );
+    killed_after_first_restart_point(&scene, &scratch);
+    let err = run_again(&scene, &scratch, &["--from-scratch"]);
+    assert!(
+        err.contains(".scratch.resume (the restart point of an interrupted run: --from-scratch)"),
+        "{err}"
+    );
+    assert!(!err.contains("continuing"), "{err}");
+    for f in ["temperatures.csv", "apertures.csv"] {
+        let (a, b) = (
+            std::fs::read(resumed.join(f)).unwrap(),
+            std::fs::read(scratch.join(f)).unwrap(),
+        );
+        assert!(
+            a == b,
+            "{f} differs between the resumed run and the run from day 0"
+        );
+    }
+    let names = |d: &Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d.join("fields"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(&resumed), names(&scratch));
+    assert_eq!(names(&resumed).len(), 4, "{:?}", names(&resumed));
+    for n in names(&resumed) {
+        let (a, b) = (
+            std::fs::read(resumed.join("fields").join(&n)).unwrap(),
+            std::fs::read(scratch.join("fields").join(&n)).unwrap(),
+        );
+        assert!(a == b, "fields/{n} differs");
+    }
+    let run_txt = std::fs::read_to_string(resumed.join("run.txt")).unwrap();
+    assert!(
+        run_txt.contains("continued from the restart point of 2024-"),
+        "{run_txt}"
+    );
+    // nothing left beside the two run folders: no restart point, lock or staging
+    only(&runs, &["resumed", "scratch"]);
+}
