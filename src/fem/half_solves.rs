@@ -238,7 +238,7 @@ impl ReachColumn {
                     b.next();
                 }
                 std::cmp::Ordering::Equal => {
-                    s += va.iter().zip(vb).map(|(x, y)| x * y).sum::<f64>();
+                    s += dot(va, vb);
                     a.next();
                     b.next();
                 }
@@ -250,7 +250,7 @@ impl ReachColumn {
     /// yᵀc with a dense vector in the permuted numbering.
     pub fn dot_dense(&self, c: &[f64]) -> f64 {
         self.segments()
-            .map(|(start, v)| v.iter().zip(&c[start..]).map(|(x, y)| x * y).sum::<f64>())
+            .map(|(start, v)| dot(v, &c[start..start + v.len()]))
             .sum()
     }
 
@@ -262,6 +262,28 @@ impl ReachColumn {
             }
         }
     }
+}
+
+/// xᵀy of two slices of one length, in eight interleaved partial sums: a
+/// single running sum is a chain of dependent additions the compiler may
+/// not reorder into SIMD lanes (the capacitance matrix's YᵢᵀYⱼ spent 6 %
+/// of the Xiaowan-like run's late days in it).
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    debug_assert_eq!(x.len(), y.len());
+    let mut acc = [0.0f64; 8];
+    let (xc, yc) = (x.chunks_exact(8), y.chunks_exact(8));
+    let tail: f64 = xc
+        .remainder()
+        .iter()
+        .zip(yc.remainder())
+        .map(|(a, b)| a * b)
+        .sum();
+    for (a, b) in xc.zip(yc) {
+        for k in 0..8 {
+            acc[k] += a[k] * b[k];
+        }
+    }
+    acc.iter().sum::<f64>() + tail
 }
 
 /// Rows and entries of L in the union of the reaches of `rows` (permuted
