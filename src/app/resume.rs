@@ -200,7 +200,7 @@ impl Resume {
         self.linked = written.len();
         // the histories and the snapshots first: a checkpoint is only ever
         // beside histories that reach its day
-        replace(&self.dir.join(FIELDS_INDEX), &written.to_vec(), "fields")?;
+        replace(&self.dir.join(FIELDS_INDEX), written, "fields")?;
         replace(&dir.join("history.bin"), &sim.history(), "history")?;
         let name = format!("ck-{:05}.bin", ck.day.0);
         replace(&dir.join(&name), ck, "checkpoint")?;
@@ -224,7 +224,7 @@ impl Resume {
 }
 
 /// Writes `value` beside `path` and renames it into place.
-fn replace<T: serde::Serialize>(
+fn replace<T: serde::Serialize + ?Sized>(
     path: &Path,
     value: &T,
     what: &'static str,

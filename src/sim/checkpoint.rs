@@ -104,7 +104,7 @@ impl CheckpointError {
 }
 
 /// Writes any serde value as postcard.
-pub fn write_file<T: Serialize>(
+pub fn write_file<T: Serialize + ?Sized>(
     path: &Path,
     value: &T,
     what: &'static str,
