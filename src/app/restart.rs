@@ -27,7 +27,7 @@ use crate::vocab::{Day, ZoneId, ZonePoint};
 
 pub const RESTART_DIR: &str = "restart";
 const FINGERPRINT: &str = "fingerprint.txt";
-const HISTORY: &str = "history.bin";
+pub(super) const HISTORY: &str = "history.bin";
 const INPUTS: &str = "inputs";
 const SCENE: &str = "scene.json";
 const PLAN: &str = "plan.bin";
@@ -58,7 +58,7 @@ pub fn fingerprint(scene: &Scene) -> String {
     )
 }
 
-fn ck_name(day: Day) -> String {
+pub(super) fn ck_name(day: Day) -> String {
     format!("ck-{:05}.bin", day.0)
 }
 
@@ -271,7 +271,8 @@ fn damaged(path: &Path, e: &CheckpointError, instead: Option<(Day, NaiveDate)>) 
     )
 }
 
-fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
+/// The checkpoints in `dir`, by the day in their names (unordered).
+pub(super) fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
     let rd = std::fs::read_dir(dir).map_err(|source| CheckpointError::Io {
         path: dir.display().to_string(),
         source,
@@ -283,6 +284,21 @@ fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
             ck_day(&name).map(|d| (d, e.path()))
         })
         .collect())
+}
+
+/// Writes what decides whether the restart folder `dir` (created) is
+/// usable: the schedules as run, then the fingerprint of the scene and
+/// program (last, so that a folder stopped on the way is never used).
+pub(super) fn write_identity(
+    dir: &Path,
+    scene: &Scene,
+    schedules: &Schedules,
+) -> Result<(), CheckpointError> {
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    let inputs = dir.join(INPUTS);
+    schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
+    let f = dir.join(FINGERPRINT);
+    std::fs::write(&f, fingerprint(scene)).map_err(io_err(&f))
 }
 
 /// Writes `restart/` into the run folder being staged: the checkpoints on or
@@ -297,11 +313,7 @@ pub fn save(
     previous: Option<&Path>,
 ) -> Result<usize, CheckpointError> {
     let dir = staging.join(RESTART_DIR);
-    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
-    let inputs = dir.join(INPUTS);
-    schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
-    std::fs::write(dir.join(FINGERPRINT), fingerprint(scene))
-        .map_err(io_err(&dir.join(FINGERPRINT)))?;
+    write_identity(&dir, scene, schedules)?;
     write_file(&dir.join(HISTORY), history, "history")?;
     let mut n = 0;
     let mut have: Vec<Day> = Vec::new();

@@ -37,10 +37,10 @@ use std::time::Instant;
 
 use chrono::NaiveDate;
 
-use super::restart::{self, fingerprint, RESTART_DIR};
-use super::AppError;
+use super::restart::{self, RESTART_DIR};
+use super::{io_err, AppError};
 use crate::planner::plan::Restart;
-use crate::schedule::{self, Schedules, Warning};
+use crate::schedule::{Schedules, Warning};
 use crate::sim::checkpoint::{read_file, write_file};
 use crate::sim::{Checkpoint, Simulation};
 
@@ -86,13 +86,6 @@ pub fn dir_of(dest: &Path) -> PathBuf {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "run".into());
     dest.with_file_name(format!(".{name}.resume"))
-}
-
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AppError + '_ {
-    move |source| AppError::Io {
-        path: path.display().to_string(),
-        source,
-    }
 }
 
 impl Resume {
@@ -184,14 +177,9 @@ impl Resume {
         }
         let dir = self.dir.join(RESTART_DIR);
         if !self.started {
-            // a folder left by another run of other inputs was removed in `open`
-            let _ = std::fs::remove_dir_all(&self.dir);
-            let inputs = dir.join("inputs");
+            // `open` removed any folder another run left here
             std::fs::create_dir_all(self.dir.join(FIELDS)).map_err(io_err(&self.dir))?;
-            schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
-            // last: a folder without it is never resumed from
-            let f = dir.join("fingerprint.txt");
-            std::fs::write(&f, fingerprint(sim.scene)).map_err(io_err(&f))?;
+            restart::write_identity(&dir, sim.scene, schedules)?;
             self.started = true;
         }
         for (_, name) in &written[self.linked.min(written.len())..] {
@@ -201,13 +189,11 @@ impl Resume {
         // the histories and the snapshots first: a checkpoint is only ever
         // beside histories that reach its day
         replace(&self.dir.join(FIELDS_INDEX), written, "fields")?;
-        replace(&dir.join("history.bin"), &sim.history(), "history")?;
-        let name = format!("ck-{:05}.bin", ck.day.0);
-        replace(&dir.join(&name), ck, "checkpoint")?;
-        for e in std::fs::read_dir(&dir).map_err(io_err(&dir))?.flatten() {
-            let n = e.file_name().to_string_lossy().into_owned();
-            if n.starts_with("ck-") && n != name {
-                std::fs::remove_file(e.path()).map_err(io_err(&e.path()))?;
+        replace(&dir.join(restart::HISTORY), &sim.history(), "history")?;
+        replace(&dir.join(restart::ck_name(ck.day)), ck, "checkpoint")?;
+        for (day, path) in restart::list(&dir)? {
+            if day != ck.day {
+                std::fs::remove_file(&path).map_err(io_err(&path))?;
             }
         }
         self.saved = Some(Instant::now());
