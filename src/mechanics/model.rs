@@ -357,8 +357,15 @@ impl MechState {
             live: vec![false; n_el],
             birth_day: vec![f64::NAN; n_el],
             stress: vec![[[0.0; 6]; 8]; n_el],
+            // The rock never creeps: its points keep no terms (on the
+            // Xiaowan-like arch half the elements, a third of a checkpoint).
             creep: if n_creep > 0 {
-                vec![CreepState::new(n_creep); 8 * n_el]
+                concrete
+                    .iter()
+                    .flat_map(|&c| {
+                        std::iter::repeat_n(CreepState::new(if c { n_creep } else { 0 }), 8)
+                    })
+                    .collect()
             } else {
                 Vec::new()
             },
@@ -1380,5 +1387,20 @@ fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettin
         force_tolerance: 1e-9,
         bond_strength: joint.bond_strength_pa,
         capacitance: joint.capacitance,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_concrete_keeps_creep_terms() {
+        let s = MechState::before_pours(16, &[true, false, true], 0, 2);
+        let terms: Vec<usize> = s.creep.iter().map(|c| c.omega.len()).collect();
+        assert_eq!(terms.len(), 24);
+        assert!(terms[..8].iter().chain(&terms[16..]).all(|&n| n == 2));
+        assert!(terms[8..16].iter().all(|&n| n == 0));
+        assert!(MechState::before_pours(16, &[true, false], 0, 0).creep.is_empty());
     }
 }
