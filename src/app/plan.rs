@@ -86,7 +86,6 @@ pub fn plan(
     }
     let options = request.options(inputs);
     let epoch = scene.epoch;
-    let as_of = options.as_of;
     // The restart may not be later than this plan's own end.
     let end = options.end_day(epoch, &inputs.schedules);
     let dest = out.dest();
@@ -118,7 +117,7 @@ pub fn plan(
         .chain(questionable);
     warnings.splice(0..0, all);
 
-    let checkpoints_kept = write_folder(inputs, dest, &out_plan, as_of, prev_dir.as_deref())?;
+    let checkpoints_kept = write_folder(inputs, dest, &out_plan, prev_dir.as_deref())?;
     Ok(PlanSummary {
         out: out.path().to_path_buf(),
         remedied: out_plan.remedied.is_some(),
@@ -139,7 +138,6 @@ fn write_folder(
     inputs: &Inputs,
     dest: &Path,
     out_plan: &planner::PlanOutput,
-    as_of: NaiveDate,
     previous: Option<&Path>,
 ) -> Result<usize, AppError> {
     let (scene, epoch) = (&inputs.scene, inputs.scene.epoch);
@@ -165,16 +163,13 @@ fn write_folder(
         let p = dir.join(REMEDIED_DIR);
         schedule::write_dir(s, &p).map_err(io_err(&p))?;
     }
-    let keep_from = epoch
-        .day(as_of)
-        .plus(-2 * scene.planner.checkpoint_days as i64);
     let checkpoints_kept = restart::save(
         dir,
         scene,
         &inputs.schedules,
         h,
         &out_plan.checkpoints,
-        keep_from,
+        out_plan.checkpoints_kept_from,
         previous,
     )?;
     restart::save_plan(dir, scene, &out_plan.plan)?;

@@ -1401,6 +1401,8 @@ mod tests {
         assert_eq!(terms.len(), 24);
         assert!(terms[..8].iter().chain(&terms[16..]).all(|&n| n == 2));
         assert!(terms[8..16].iter().all(|&n| n == 0));
-        assert!(MechState::before_pours(16, &[true, false], 0, 0).creep.is_empty());
+        assert!(MechState::before_pours(16, &[true, false], 0, 0)
+            .creep
+            .is_empty());
     }
 }

@@ -14,7 +14,7 @@ use crate::vocab::{Day, Epoch, ZoneId};
 use super::memo::{Lineage, SearchMemo};
 use super::readiness::{MeterComparison, Plan, PlanStats, ZoneHistory, ZoneReadiness};
 use super::rules::{HistoryIndex, Rules};
-use super::runner::{Runner, Span};
+use super::runner::{Keep, Runner, Span};
 use super::search::{grout_days, search};
 
 /// What to plan: the as-of date that separates history from plan, and
@@ -37,6 +37,15 @@ impl PlanOptions {
         s.grouting_by_date(last)
     }
 
+    /// The first day whose checkpoints the plan keeps, in memory and in its
+    /// run folder: two checkpoint intervals before the as-of date. A remedy
+    /// acts from the as-of date on, so its re-simulations restart from a
+    /// checkpoint this keeps, as does next week's plan; the older ones would
+    /// only hold memory (on the Xiaowan-like arch some 80 MB each).
+    pub fn checkpoints_kept_from(&self, epoch: Epoch, checkpoint_days: u32) -> Day {
+        epoch.day(self.as_of).plus(-2 * checkpoint_days as i64)
+    }
+
     /// The day the plan's baseline ends: the last zone it covers is due,
     /// or the as-of date if that is later.
     pub fn end_day(&self, epoch: Epoch, s: &Schedules) -> Day {
@@ -53,7 +62,10 @@ impl PlanOptions {
 pub struct PlanOutput {
     pub plan: Plan,
     pub history: History,
+    /// the baseline's checkpoints from `checkpoints_kept_from` on
     pub checkpoints: Vec<Checkpoint>,
+    /// [`PlanOptions::checkpoints_kept_from`]
+    pub checkpoints_kept_from: Day,
     pub baseline: RunStats,
     pub remedied: Option<Schedules>,
     /// zones that become not groutable once the remedies are applied
@@ -102,15 +114,14 @@ pub fn plan(
         Some(r) => (Some((r.checkpoint, r.history)), r.older, r.last_plan),
         None => (None, Vec::new(), None),
     };
-    let (mut runner, baseline) = Runner::baseline(
-        scene,
-        mesh,
-        schedules,
-        &span,
-        restart,
-        settings.checkpoint_days as i64,
-        &mut |d, e| progress(Progress::Baseline { day: d, end: e }),
-    )?;
+    let keep = Keep {
+        every_days: settings.checkpoint_days as i64,
+        from: options.checkpoints_kept_from(scene.epoch, settings.checkpoint_days),
+    };
+    let (mut runner, baseline) =
+        Runner::baseline(scene, mesh, schedules, &span, restart, keep, &mut |d, e| {
+            progress(Progress::Baseline { day: d, end: e })
+        })?;
     runner.add_older(older);
     let last = last.map(|l| {
         runner.lineages.extend(l.verified);
@@ -176,6 +187,7 @@ pub fn plan(
         plan,
         history: runner.history,
         checkpoints: runner.checkpoints,
+        checkpoints_kept_from: keep.from,
         baseline,
         remedied: outcome.schedules,
         newly_flagged: outcome.newly_flagged,

@@ -33,6 +33,15 @@ pub struct Runner<'a> {
     thermal_scene: OnceLock<Scene>,
 }
 
+/// Which checkpoints the baseline keeps.
+#[derive(Debug, Clone, Copy)]
+pub struct Keep {
+    /// one every this many days
+    pub every_days: i64,
+    /// none before this day once a later one is taken
+    pub from: Day,
+}
+
 /// How a re-simulation runs, besides what it covers.
 struct Control<'c> {
     /// factorise each mechanical step on the second core
@@ -80,13 +89,14 @@ impl<'a> Runner<'a> {
         schedules: &Schedules,
         span: &Span,
         restart: Option<(Checkpoint, History)>,
-        every_days: i64,
+        keep: Keep,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<(Runner<'a>, RunStats), SimError> {
         let mut sim = Simulation::new(scene, mesh, schedules)?;
         sim.set_end_day(span.end_day);
         sim.observe_days(&span.observe);
-        sim.checkpoint_every = Some(every_days);
+        sim.checkpoint_every = Some(keep.every_days);
+        sim.checkpoints_kept_from = Some(keep.from);
         if let Some((ck, history)) = &restart {
             sim.restore(ck, history);
         }

@@ -211,6 +211,9 @@ impl Simulation<'_> {
 
     pub(super) fn maybe_checkpoint(&mut self) {
         if self.checkpoint_due() {
+            if let Some(from) = self.checkpoints_kept_from {
+                self.checkpoints.retain(|c| c.day >= from);
+            }
             self.checkpoints.push(self.checkpoint());
         }
     }

@@ -152,6 +152,10 @@ pub struct Simulation<'a> {
     /// after the last one (None: no checkpoints).
     pub checkpoint_every: Option<i64>,
     pub checkpoints: Vec<Checkpoint>,
+    /// Checkpoints before this day are dropped once a newer one is taken
+    /// (None: all are kept). The planner keeps what its run folder keeps:
+    /// on the Xiaowan-like arch a checkpoint is some 80 MB.
+    pub checkpoints_kept_from: Option<Day>,
     /// Set from another thread to stop the run at the end of its current step
     /// with [`SimError::Cancelled`] (a what-if the engineer gave up on).
     pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
@@ -247,6 +251,7 @@ impl<'a> Simulation<'a> {
             },
             checkpoint_every: None,
             checkpoints: Vec::new(),
+            checkpoints_kept_from: None,
             cancel: None,
             events_pending: true,
             pours_done: 0,

@@ -425,3 +425,27 @@ fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
         "bit for bit up to the stop"
     );
 }
+
+/// The planner keeps in memory the checkpoints its run folder keeps
+/// (`PlanOptions::checkpoints_kept_from`): a run told a day drops the older
+/// ones as it takes newer ones, and keeps the same ones from that day on.
+#[test]
+fn a_run_keeps_no_checkpoint_before_the_day_it_is_told() {
+    let inputs = inputs();
+    let mut scene = inputs.scene.clone();
+    // The temperatures alone: the checkpoints' days are what is tested.
+    scene.effects.retain(|e| !e.is_mechanical());
+    let run = |from: Option<Day>| {
+        let mut sim = Simulation::new(&scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.set_end_day(END);
+        sim.checkpoint_every = Some(30);
+        sim.checkpoints_kept_from = from;
+        sim.run(None, &mut |_, _| {}).unwrap();
+        sim.checkpoints.iter().map(|c| c.day).collect::<Vec<Day>>()
+    };
+    let all = run(None);
+    let kept = run(Some(Day(100)));
+    assert_eq!(all.len(), 6, "{all:?}");
+    let expected: Vec<Day> = all.into_iter().filter(|&d| d >= Day(100)).collect();
+    assert_eq!(kept, expected);
+}
