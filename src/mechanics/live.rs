@@ -60,8 +60,11 @@ pub const NONE: u32 = u32::MAX;
 /// factor made ahead took 263.6 s against 361.2 s on both cores with a
 /// threshold of 30,000 (99.1 against 115.9 s over 120 days): the step's
 /// own work overlaps the factorisation. Larger sets (the untied arch from
-/// its first weeks, the complete dams) stay on both cores, unmeasured
-/// against one.
+/// its first weeks, the complete dams) stay on both cores: on the tied
+/// arch's days 870–890 (resumed from one checkpoint, alone on the 2 cores,
+/// 27 Nov 2026) the threshold removed (one core, and the factor made ahead
+/// where it fits [`super::ahead`]'s memory limit) took the same 20 days in
+/// 420 s as both cores: no gain to take.
 pub const PARALLEL_FROM_DOFS: usize = 100_000;
 
 /// One element in the reduced unknowns.
