@@ -177,7 +177,8 @@ pub struct ChosenTogether {
     pub set_c: f64,
     pub set_zone_by_zone_c: f64,
     /// whether the zone-by-zone steps, applied together, made every zone
-    /// of the search groutable; when not, `set_c` may exceed
+    /// of the search groutable (in the search's own runs: on temperatures
+    /// when it ran the thermal effects alone); when not, `set_c` may exceed
     /// `set_zone_by_zone_c` (it is what holding them together costs)
     #[serde(default = "held")]
     pub zone_by_zone_held: bool,

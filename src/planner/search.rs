@@ -12,7 +12,7 @@
 //!   temperature alone (its joint already open enough), the search and the
 //!   set chosen together below run the thermal effects alone
 //!   ([`Runner::simulate_temperatures`]: the same temperatures to the bit,
-//!   10–15× cheaper on the demo) and their answer is confirmed by runs
+//!   10–15× cheaper on the demo) and their answer is confirmed by a run
 //!   with every effect, whose apertures it reports; a joint that closes
 //!   under it sends the search back to runs with every effect;
 //! - **supercooling together**: zones that are neighbours (sharing a block,
@@ -709,7 +709,7 @@ impl Bracket {
 /// open enough), the least supercooling is a question for the heat
 /// equation: the grid search and the set chosen together run the thermal
 /// effects alone ([`Runner::simulate_temperatures`], the same temperatures
-/// at a fraction of the cost), and the answer is confirmed by runs with
+/// at a fraction of the cost), and the answer is confirmed by a run with
 /// every effect ([`confirm_with_mechanics`]), whose apertures it reports.
 /// Should a joint close under the answer there, the search runs again with
 /// every effect.
@@ -834,11 +834,18 @@ fn grid_search(
     Ok(out)
 }
 
-/// Runs the supercooling `found` on temperatures with every effect: the
-/// proposed steps, and, where sets were chosen together, the zone-by-zone
-/// steps as well (whether they held applied together is part of the
-/// answer). Returns `found` with the deciding apertures of those runs, or
-/// None when a proposed zone is not groutable there (a joint closed).
+/// Runs the supercooling `found` on temperatures with every effect, once:
+/// the proposed steps. Returns `found` with the deciding apertures of that
+/// run, or None when a proposed zone is not groutable there (a joint
+/// closed).
+///
+/// Where a set was chosen together, whether the zone-by-zone steps held
+/// applied together stays as the temperature runs that found the set read
+/// it (`Together::zone_by_zone_held`): every candidate here was open enough
+/// and failed on temperature alone. A second run with every effect for it
+/// cost the demo's plan a whole re-simulation (2 s of its 32 s; its
+/// searches' runs share the 2 cores) to word a note about a remedy not
+/// proposed.
 fn confirm_with_mechanics(
     ctx: &mut Ctx,
     cands: &[&ZoneReadiness],
@@ -855,40 +862,22 @@ fn confirm_with_mechanics(
     if proposed.is_empty() {
         return Ok(Some(found));
     }
-    let zone_by_zone: BTreeMap<ZoneId, u32> = found
-        .iter()
-        .filter_map(|(k, (o, _))| {
-            o.as_ref().map(|o| {
-                let c = o.together.as_ref().map_or(o.delta_c, |t| t.zone_by_zone_c);
-                (*k, grid(c))
-            })
-        })
-        .collect();
-    let mut points = vec![proposed.clone()];
-    if zone_by_zone != proposed {
-        points.push(zone_by_zone);
-    }
     let group: Vec<&ZoneReadiness> = cands
         .iter()
         .copied()
         .filter(|z| proposed.contains_key(&z.zone_id()))
         .collect();
     let ids: Vec<ZoneId> = group.iter().map(|z| z.zone_id()).collect();
-    let ks: Vec<Vec<u32>> = points
-        .iter()
-        .map(|p| ids.iter().map(|z| p[z]).collect())
-        .collect();
-    let runs = joint_remedy::evaluate(ctx, &group, span, build, &ks)?;
-    if !runs[0].passed {
+    let ks = vec![ids.iter().map(|z| proposed[z]).collect()];
+    let run = joint_remedy::evaluate(ctx, &group, span, build, &ks)?
+        .pop()
+        .expect("one run");
+    if !run.passed {
         return Ok(None);
     }
-    let held = runs.get(1).is_none_or(|r| r.passed);
     for (i, z) in ids.iter().enumerate() {
         if let Some((Some(o), _)) = found.get_mut(z) {
-            o.aperture_mm = runs[0].apertures[i];
-            if let Some(t) = o.together.as_mut() {
-                t.zone_by_zone_held = held;
-            }
+            o.aperture_mm = run.apertures[i];
         }
     }
     Ok(Some(found))
