@@ -117,6 +117,7 @@ pub fn plan(
     let keep = Keep {
         every_days: settings.checkpoint_days as i64,
         from: options.checkpoints_kept_from(scene.epoch, settings.checkpoint_days),
+        on: scene.epoch.day(as_of),
     };
     let (mut runner, baseline) =
         Runner::baseline(scene, mesh, schedules, &span, restart, keep, &mut |d, e| {

@@ -40,6 +40,8 @@ pub struct Keep {
     pub every_days: i64,
     /// none before this day once a later one is taken
     pub from: Day,
+    /// and one on this day (the as-of date), where the remedies' runs restart
+    pub on: Day,
 }
 
 /// How a re-simulation runs, besides what it covers.
@@ -97,6 +99,7 @@ impl<'a> Runner<'a> {
         sim.observe_days(&span.observe);
         sim.checkpoint_every = Some(keep.every_days);
         sim.checkpoints_kept_from = Some(keep.from);
+        sim.checkpoint_on = Some(keep.on);
         if let Some((ck, history)) = &restart {
             sim.restore(ck, history);
         }

@@ -220,13 +220,13 @@ impl Simulation<'_> {
 
     /// Is a checkpoint due at the current day?
     pub(super) fn checkpoint_due(&self) -> bool {
+        let last = self.checkpoints.last().map(|c| c.day);
+        let on = self
+            .checkpoint_on
+            .is_some_and(|d| self.day >= d.t() && last.is_none_or(|l| l < d));
         let Some(every) = self.checkpoint_every else {
-            return false;
+            return on;
         };
-        let due = self
-            .checkpoints
-            .last()
-            .map_or(Day(every), |c| c.day.plus(every));
-        self.day >= due.t()
+        on || self.day >= last.map_or(Day(every), |l| l.plus(every)).t()
     }
 }

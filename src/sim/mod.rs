@@ -156,6 +156,10 @@ pub struct Simulation<'a> {
     /// (None: all are kept). The planner keeps what its run folder keeps:
     /// on the Xiaowan-like arch a checkpoint is some 80 MB.
     pub checkpoints_kept_from: Option<Day>,
+    /// Also keep a checkpoint at the first whole day on or after this one,
+    /// whatever the interval: the planner's as-of date, where every remedy
+    /// acts from and so every re-simulation of one restarts.
+    pub checkpoint_on: Option<Day>,
     /// Set from another thread to stop the run at the end of its current step
     /// with [`SimError::Cancelled`] (a what-if the engineer gave up on).
     pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
@@ -252,6 +256,7 @@ impl<'a> Simulation<'a> {
             checkpoint_every: None,
             checkpoints: Vec::new(),
             checkpoints_kept_from: None,
+            checkpoint_on: None,
             cancel: None,
             events_pending: true,
             pours_done: 0,

@@ -449,3 +449,30 @@ fn a_run_keeps_no_checkpoint_before_the_day_it_is_told() {
     let expected: Vec<Day> = all.into_iter().filter(|&d| d >= Day(100)).collect();
     assert_eq!(kept, expected);
 }
+
+/// The plan's baseline also keeps a checkpoint on its as-of date
+/// (`Simulation::checkpoint_on`), where every remedy acts from, so the
+/// remedies' re-simulations restart there instead of at the regular
+/// checkpoint before it; the regular interval then counts from it.
+#[test]
+fn a_run_keeps_a_checkpoint_on_the_day_it_is_told() {
+    let inputs = inputs();
+    let mut scene = inputs.scene.clone();
+    scene.effects.retain(|e| !e.is_mechanical());
+    let run = |on: Option<Day>| {
+        let mut sim = Simulation::new(&scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.set_end_day(END);
+        sim.checkpoint_every = Some(30);
+        sim.checkpoint_on = on;
+        sim.run(None, &mut |_, _| {}).unwrap();
+        sim.checkpoints.iter().map(|c| c.day).collect::<Vec<Day>>()
+    };
+    let regular = run(None);
+    let told = run(Some(Day(100)));
+    assert!(!regular.contains(&Day(100)), "{regular:?}");
+    let before: Vec<Day> = regular.iter().copied().filter(|&d| d < Day(100)).collect();
+    let after: Vec<Day> = told.iter().copied().filter(|&d| d > Day(100)).collect();
+    assert_eq!(told[..before.len()], before[..], "{told:?}");
+    assert_eq!(told[before.len()], Day(100), "{told:?}");
+    assert_eq!(after.first(), Some(&Day(130)), "{told:?}");
+}
