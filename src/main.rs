@@ -360,6 +360,9 @@ fn run(
     if let Some(g) = &summary.grouting {
         print!("{g}");
     }
+    if let Some(r) = &summary.reopening {
+        print!("{r}");
+    }
     println!("wrote {}", summary.out.display());
     Ok(0)
 }

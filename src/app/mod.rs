@@ -162,6 +162,8 @@ pub struct RunSummary {
     /// the zones planned within the run, judged on their planned dates
     /// (a run with joints and a grouting schedule)
     pub grouting: Option<crate::report::GroutingDistribution>,
+    /// the grouted zones that cracked open again (a run with joints)
+    pub reopening: Option<crate::report::Reopening>,
     /// the date an interrupted run was continued from ([`resume`])
     pub resumed_from: Option<chrono::NaiveDate>,
 }
@@ -276,6 +278,8 @@ pub fn run(
     let pvd = fields.join("fields.pvd");
     mesh::vtu::write_pvd(&pvd, &written).map_err(io_err(&pvd))?;
     let grouting = grouting_distribution(inputs, &sim);
+    let reopening = (!sim.joint_records.columns.is_empty())
+        .then(|| crate::report::Reopening::of(&sim.joint_records, inputs.scene.epoch));
     let summary = staging.path().join("run.txt");
     let mut text = run_text(inputs, &stats);
     if let Some(d) = resumed_from {
@@ -285,6 +289,9 @@ pub fn run(
     }
     if let Some(g) = &grouting {
         text += &g.to_string();
+    }
+    if let Some(r) = &reopening {
+        text += &r.to_string();
     }
     std::fs::write(&summary, text).map_err(io_err(&summary))?;
     let snapshots = written.len();
@@ -300,6 +307,7 @@ pub fn run(
         aperture_rows,
         snapshots,
         grouting,
+        reopening,
     })
 }
 

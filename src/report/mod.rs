@@ -16,6 +16,7 @@ pub mod distribution;
 pub mod json;
 pub mod markdown;
 pub mod meters;
+pub mod reopening;
 pub mod scale;
 pub mod summary;
 pub mod svg;
@@ -28,6 +29,7 @@ use std::path::{Path, PathBuf};
 use crate::planner::Plan;
 
 pub use distribution::GroutingDistribution;
+pub use reopening::Reopening;
 pub use summary::Summary;
 pub use terminal::readiness_table;
 

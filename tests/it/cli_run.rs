@@ -131,6 +131,7 @@ fn run_writes_temperatures_apertures_and_snapshots() {
     );
 
     grouting_distribution_reads_the_csv(&out, &rows);
+    reopening_reads_the_csv(&out, &rows);
 
     only(
         &out,
@@ -340,6 +341,54 @@ fn grouting_distribution_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
     assert_eq!(n.len(), 3, "{verdicts}");
     assert_eq!(n.iter().sum::<usize>(), planned.len(), "{verdicts}");
     assert!(n[2] >= count(f64::MIN, 0.5), "{verdicts}");
+}
+
+/// `run.txt`'s grouted zones that re-opened agree with `apertures.csv`,
+/// which samples the daily history weekly and on the grouting dates: every
+/// zone point the CSV shows re-opened is counted, and the widest opening
+/// since grouting is at least the CSV's (the CSV's aperture less the
+/// point's first grouted one).
+fn reopening_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut grouted: BTreeMap<(&str, &str, &str), f64> = BTreeMap::new();
+    let mut zones = BTreeSet::new();
+    let mut widest = 0.0f64;
+    for r in rows.iter().filter(|r| r[2] != "min") {
+        let key = (r[0], r[1], r[2]);
+        let a: f64 = r[5].parse().unwrap();
+        match r[6] {
+            "grouted" => {
+                grouted.entry(key).or_insert(a);
+            }
+            "reopened" => {
+                zones.insert((r[0], r[1]));
+                widest = widest.max(a - grouted.get(&key).copied().unwrap_or(0.0));
+            }
+            _ => {}
+        }
+    }
+    assert!(
+        !zones.is_empty(),
+        "the small dam's faces crack open in winter"
+    );
+    let text = std::fs::read_to_string(out.join("run.txt")).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("re-opened after grouting: "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let n: usize = line["re-opened after grouting: ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(n >= zones.len(), "{line}: the CSV shows {}", zones.len());
+    let wide = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("widest opening since grouting "))
+        .unwrap_or_else(|| panic!("{text}"));
+    let mm: f64 = wide.split(' ').next().unwrap().parse().unwrap();
+    assert!(mm >= widest - 0.005, "{wide}: the CSV shows {widest:.4} mm");
 }
 
 /// Starts `groutready run SCENE --out OUT` and kills it (SIGKILL: no
