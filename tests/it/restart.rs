@@ -426,25 +426,30 @@ fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
     );
 }
 
+/// The days of the checkpoints a thermal run of the small dam keeps, one
+/// every 30 days, none before `kept_from` once a later one is taken, and
+/// one on `on` (the temperatures alone: the checkpoints' days are what is
+/// tested).
+fn checkpoint_days(kept_from: Option<Day>, on: Option<Day>) -> Vec<Day> {
+    let inputs = inputs();
+    let mut scene = inputs.scene.clone();
+    scene.effects.retain(|e| !e.is_mechanical());
+    let mut sim = Simulation::new(&scene, &inputs.mesh, &inputs.schedules).unwrap();
+    sim.set_end_day(END);
+    sim.checkpoint_every = Some(30);
+    sim.checkpoints_kept_from = kept_from;
+    sim.checkpoint_on = on;
+    sim.run(None, &mut |_, _| {}).unwrap();
+    sim.checkpoints.iter().map(|c| c.day).collect()
+}
+
 /// The planner keeps in memory the checkpoints its run folder keeps
 /// (`PlanOptions::checkpoints_kept_from`): a run told a day drops the older
 /// ones as it takes newer ones, and keeps the same ones from that day on.
 #[test]
 fn a_run_keeps_no_checkpoint_before_the_day_it_is_told() {
-    let inputs = inputs();
-    let mut scene = inputs.scene.clone();
-    // The temperatures alone: the checkpoints' days are what is tested.
-    scene.effects.retain(|e| !e.is_mechanical());
-    let run = |from: Option<Day>| {
-        let mut sim = Simulation::new(&scene, &inputs.mesh, &inputs.schedules).unwrap();
-        sim.set_end_day(END);
-        sim.checkpoint_every = Some(30);
-        sim.checkpoints_kept_from = from;
-        sim.run(None, &mut |_, _| {}).unwrap();
-        sim.checkpoints.iter().map(|c| c.day).collect::<Vec<Day>>()
-    };
-    let all = run(None);
-    let kept = run(Some(Day(100)));
+    let all = checkpoint_days(None, None);
+    let kept = checkpoint_days(Some(Day(100)), None);
     assert_eq!(all.len(), 6, "{all:?}");
     let expected: Vec<Day> = all.into_iter().filter(|&d| d >= Day(100)).collect();
     assert_eq!(kept, expected);
@@ -456,19 +461,8 @@ fn a_run_keeps_no_checkpoint_before_the_day_it_is_told() {
 /// checkpoint before it; the regular interval then counts from it.
 #[test]
 fn a_run_keeps_a_checkpoint_on_the_day_it_is_told() {
-    let inputs = inputs();
-    let mut scene = inputs.scene.clone();
-    scene.effects.retain(|e| !e.is_mechanical());
-    let run = |on: Option<Day>| {
-        let mut sim = Simulation::new(&scene, &inputs.mesh, &inputs.schedules).unwrap();
-        sim.set_end_day(END);
-        sim.checkpoint_every = Some(30);
-        sim.checkpoint_on = on;
-        sim.run(None, &mut |_, _| {}).unwrap();
-        sim.checkpoints.iter().map(|c| c.day).collect::<Vec<Day>>()
-    };
-    let regular = run(None);
-    let told = run(Some(Day(100)));
+    let regular = checkpoint_days(None, None);
+    let told = checkpoint_days(None, Some(Day(100)));
     assert!(!regular.contains(&Day(100)), "{regular:?}");
     let before: Vec<Day> = regular.iter().copied().filter(|&d| d < Day(100)).collect();
     let after: Vec<Day> = told.iter().copied().filter(|&d| d > Day(100)).collect();
