@@ -33,7 +33,8 @@
 //!   the as-of date to its date with the remedy (`Remedy::verified_history`,
 //!   drawn by the charts). That run is the plan's last and runs alone, so
 //!   it factorises each mechanical step ahead on the second core; the
-//!   searches' runs, two side by side, do not.
+//!   searches' runs, two side by side, do not, but for the delay run,
+//!   which outlasts the supercooling search beside it.
 //!
 //! Verified by `tests/it/planner_*.rs`, `tests/it/demo_plan.rs`,
 //! `tests/it/cli_plan.rs` and `tests/it/restart.rs` (a thermal run's zone
@@ -1079,7 +1080,7 @@ fn delay_search(
                 .iter()
                 .all(|(_, d)| d.found())
     };
-    let h = ctx.runner.simulate_until(&sched, &span, &mut stop)?;
+    let h = ctx.runner.simulate_until(&sched, &span, &mut stop, true)?;
     for (key, d) in delay_days(rules, base, flagged, &h) {
         match d {
             DelayDay::Found {

@@ -407,7 +407,7 @@ fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
 
     let stop_at = Day(150);
     let stopped = runner
-        .simulate_until(&remedied, &span, &mut |d, _| d >= stop_at)
+        .simulate_until(&remedied, &span, &mut |d, _| d >= stop_at, false)
         .unwrap();
     let up_to = |h: &History, end: Day| {
         let mut h = h.clone();
