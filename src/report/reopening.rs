@@ -60,7 +60,8 @@ impl Reopening {
             wide_points: 0,
             largest: None,
         };
-        let mut grouted = std::collections::BTreeMap::<ZoneId, (bool, bool)>::new();
+        let mut grouted = std::collections::BTreeSet::<ZoneId>::new();
+        let mut reopened = std::collections::BTreeSet::<ZoneId>::new();
         for (i, col) in records.columns.iter().enumerate() {
             if col.point == ZonePoint::Min {
                 continue;
@@ -80,12 +81,13 @@ impl Reopening {
                     _ => {}
                 }
             }
-            let entry = grouted.entry(col.zone).or_default();
-            entry.0 |= at_grouting.is_some() || widest.is_some();
+            if at_grouting.is_some() || widest.is_some() {
+                grouted.insert(col.zone);
+            }
             let Some((since, day)) = widest else {
                 continue;
             };
-            entry.1 = true;
+            reopened.insert(col.zone);
             out.points += 1;
             out.wide_points += usize::from(since > WIDE_MM);
             if col.point == ZonePoint::Center {
@@ -100,8 +102,8 @@ impl Reopening {
                 });
             }
         }
-        out.grouted = grouted.values().filter(|g| g.0).count();
-        out.zones = grouted.values().filter(|g| g.1).count();
+        out.grouted = grouted.len();
+        out.zones = reopened.len();
         out
     }
 }
