@@ -236,6 +236,7 @@ fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
 const EXIT_FLAGGED: u8 = 3;
 
 fn main() -> ExitCode {
+    groutready::machine::keep_freed_memory();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
