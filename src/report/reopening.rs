@@ -7,7 +7,9 @@
 //! zone re-opened wide enough is grouted a second time. A recorded point's
 //! aperture after grouting is the aperture it was grouted with plus its
 //! opening since, so the opening since grouting is the recorded aperture
-//! less the point's first grouted one. Read at the three zone points only:
+//! less the point's first grouted one (a point whose layer cracks within
+//! its grouting day's step has no grouted sample: it was grouted with its
+//! aperture of the day before). Read at the three zone points only:
 //! the zone's least aperture (`min`) may sit at another node each day.
 
 use std::fmt;
@@ -68,20 +70,25 @@ impl Reopening {
             }
             let samples = records.rows.iter().filter_map(|r| r.1[i].map(|s| (r.0, s)));
             let mut at_grouting: Option<f64> = None;
+            // the last aperture before grouting: what a point whose layer
+            // cracks within its grouting day's step was grouted with
+            let mut before = 0.0;
             let mut widest: Option<(f64, crate::vocab::Day)> = None;
             for (day, s) in samples {
                 match s.state {
                     JointState::Grouted if at_grouting.is_none() => at_grouting = Some(s.aperture),
                     JointState::Reopened => {
-                        let since = (s.aperture - at_grouting.unwrap_or(0.0)) * 1e3;
+                        let grouted_with = *at_grouting.get_or_insert(before);
+                        let since = (s.aperture - grouted_with) * 1e3;
                         if widest.is_none_or(|w| since > w.0) {
                             widest = Some((since, day));
                         }
                     }
+                    _ if at_grouting.is_none() => before = s.aperture,
                     _ => {}
                 }
             }
-            if at_grouting.is_some() || widest.is_some() {
+            if at_grouting.is_some() {
                 grouted.insert(col.zone);
             }
             let Some((since, day)) = widest else {
@@ -227,5 +234,32 @@ mod tests {
             r.to_string(),
             "re-opened after grouting: 1 of 2 grouted zones (0 at the centre), 1 zone points (1 by more than 0.50 mm)\n  widest opening since grouting 0.80 mm: joint 1 zone 1 downstream, 2024-02-10\n"
         );
+    }
+
+    /// A point whose layer cracks within its grouting day's step is never
+    /// recorded grouted: its opening since grouting is read from its
+    /// aperture of the day before (0.6 mm), not from zero.
+    #[test]
+    fn a_layer_cracked_on_its_grouting_day_is_read_from_the_day_before() {
+        use JointState::*;
+        let zone = ZoneId::new(2, 3);
+        let records = JointRecords {
+            columns: vec![crate::sim::JointColumn {
+                zone,
+                point: ZonePoint::Upstream,
+                site: None,
+            }],
+            rows: vec![
+                (crate::vocab::Day(5), vec![sample(0.6, Open)]),
+                (crate::vocab::Day(6), vec![sample(0.9, Reopened)]),
+                (crate::vocab::Day(7), vec![sample(0.7, Reopened)]),
+            ],
+        };
+        let epoch = Epoch(NaiveDate::from_ymd_opt(2024, 1, 1).unwrap());
+        let r = Reopening::of(&records, epoch);
+        assert_eq!((r.grouted, r.zones, r.points, r.wide_points), (1, 1, 1, 0));
+        let w = r.largest.unwrap();
+        assert!((w.opening_mm - 0.3).abs() < 1e-12, "{w:?}");
+        assert_eq!(w.date, NaiveDate::from_ymd_opt(2024, 1, 7).unwrap());
     }
 }

@@ -350,7 +350,10 @@ fn grouting_distribution_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
 /// point's first grouted one).
 fn reopening_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
     use std::collections::{BTreeMap, BTreeSet};
+    // a point's first grouted aperture, else (its layer cracked within its
+    // grouting day's step) its last aperture before
     let mut grouted: BTreeMap<(&str, &str, &str), f64> = BTreeMap::new();
+    let mut before: BTreeMap<(&str, &str, &str), f64> = BTreeMap::new();
     let mut zones = BTreeSet::new();
     let mut widest = 0.0f64;
     for r in rows.iter().filter(|r| r[2] != "min") {
@@ -362,7 +365,11 @@ fn reopening_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
             }
             "reopened" => {
                 zones.insert((r[0], r[1]));
-                widest = widest.max(a - grouted.get(&key).copied().unwrap_or(0.0));
+                let from = before.get(&key).copied().unwrap_or(0.0);
+                widest = widest.max(a - *grouted.entry(key).or_insert(from));
+            }
+            _ if !grouted.contains_key(&key) => {
+                before.insert(key, a);
             }
             _ => {}
         }
