@@ -89,6 +89,17 @@ pub struct SolverStats {
     pub reach_seconds: f64,
 }
 
+/// Parallelism of every triangular solve, whatever the factorisation's.
+/// A solve reads each entry of L once per right-hand side: it is bound by
+/// memory, and faer's parallel supernodal sweeps only add rayon's
+/// scheduling. Measured alone on the 2 cores (27 Nov 2026, METIS, the
+/// complete mechanical matrices; `Par::Seq` against `Par::rayon(0)`): the
+/// Xiaowan-like arch's (344,643 dofs, L 144.7M entries) 197 against
+/// 206–216 ms for one right-hand side, 319–321 against 423–459 ms for 4,
+/// 564–595 against 762–803 ms for 16; the demo's (25,458 dofs) 4.7 against
+/// 4.7–4.9 ms, 9.5–10.2 against 14.5 ms and 19.7 against 33.6 ms.
+const SOLVE_PAR: Par = Par::Seq;
+
 /// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
 /// factorisation per matrix, any number of solves.
 pub struct CholeskySolver {
@@ -360,12 +371,12 @@ impl CholeskySolver {
         }
         let t = Instant::now();
         let mut rhs = rhs;
-        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, self.par))
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))
             .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
         LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
             Conj::No,
             rhs.as_mut(),
-            self.par,
+            SOLVE_PAR,
             MemStack::new(&mut mem),
         );
         let seconds = t.elapsed().as_secs_f64();
@@ -429,7 +440,7 @@ impl CholeskySolver {
     /// L⁻¹x when `lower`, L⁻ᵀx otherwise.
     fn triangle_solve(&self, x: &mut [f64], lower: bool) -> Result<(), SolveError> {
         let n = x.len();
-        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(1, self.par))
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(1, SOLVE_PAR))
             .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
         let stack = MemStack::new(&mut mem);
         let rhs = MatMut::from_column_major_slice_mut(x, n, 1);
@@ -437,22 +448,22 @@ impl CholeskySolver {
             SymbolicCholeskyRaw::Simplicial(s) => {
                 let l = SparseColMatRef::new(s.factor(), &self.l_values);
                 if lower {
-                    sparse_triangular::solve_lower_triangular_in_place(l, Conj::No, rhs, self.par);
+                    sparse_triangular::solve_lower_triangular_in_place(l, Conj::No, rhs, SOLVE_PAR);
                 } else {
                     sparse_triangular::solve_lower_triangular_transpose_in_place(
                         l,
                         Conj::No,
                         rhs,
-                        self.par,
+                        SOLVE_PAR,
                     );
                 }
             }
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = SupernodalLltRef::new(s, &self.l_values);
                 if lower {
-                    l.l_solve_with_conj(Conj::No, rhs, self.par, stack);
+                    l.l_solve_with_conj(Conj::No, rhs, SOLVE_PAR, stack);
                 } else {
-                    l.l_transpose_solve_with_conj(Conj::No, rhs, self.par, stack);
+                    l.l_transpose_solve_with_conj(Conj::No, rhs, SOLVE_PAR, stack);
                 }
             }
         }

@@ -52,7 +52,8 @@ use super::rock_ties::{RockTies, Tie};
 pub const NONE: u32 = u32::MAX;
 
 /// Live systems of this many dofs or more are factorised on both cores
-/// (faer's `Par::rayon`); smaller ones on one, and the next step's made
+/// (faer's `Par::rayon`; their solves stay on one,
+/// [`crate::fem::CholeskySolver`]'s `SOLVE_PAR`); smaller ones on one, and the next step's made
 /// ahead on the second core ([`super::ahead`]). On the demo's systems of up
 /// to 25,458 dofs two threads made the whole run slower (221 against
 /// 165 s). On the Xiaowan-like arch with the rock tied every 4th level
