@@ -98,6 +98,8 @@ pub struct SolverStats {
 /// 206–216 ms for one right-hand side, 319–321 against 423–459 ms for 4,
 /// 564–595 against 762–803 ms for 16; the demo's (25,458 dofs) 4.7 against
 /// 4.7–4.9 ms, 9.5–10.2 against 14.5 ms and 19.7 against 33.6 ms.
+/// `cargo run --release --example factor_orderings [SCENE] fast` times
+/// them (the parallel ones: its version before this constant).
 const SOLVE_PAR: Par = Par::Seq;
 
 /// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
