@@ -89,9 +89,10 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 /// before it is the answer, so a state decided wrongly on a looser
 /// solution costs passes, never the answer. Each refinement is a full
 /// forward and backward sweep: on the Xiaowan-like complete dam (27 Nov
-/// 2026, alone on the 2 cores) 1e-9 took 128 refinements and 215.7 s
-/// against 144 and 228.1 s at 1e-10, the same 85 passes and states; the
-/// demo's whole construction is the same to the byte.
+/// 2026, alone on the 2 cores, alternated twice) 1e-9 took 128
+/// refinements and 211.6–215.7 s against 144 and 226.3–228.1 s at 1e-10,
+/// the same 85 passes and states; the demo's whole construction is the
+/// same to the byte.
 const PASS_REFINE_TO: f64 = 1e-9;
 /// Open ↔ closed and slip → stick switches of one point within a step after
 /// which the point is cycling: its normal state switches only as the single
@@ -107,13 +108,15 @@ const ANDERSON_DEPTH: usize = 8;
 /// slip forces' residual is below this many force tolerances (1e-4 of the
 /// step's largest force at the default 1e-9), not only at the last digit:
 /// on the complete Xiaowan-like dam the set of such points stopped
-/// changing at 1e-3 to 1e-5 of the largest force. The step still ends only
-/// on a residual within the force tolerance itself. That step, traced
-/// pass by pass (27 Nov 2026), reached the same sets of reversed points
-/// (387, 164, 39, 11, 1), the same final states (504 stick, 13,173 slip,
-/// 2,052 open) in 85 passes and 219 s with 1e5, against 103 passes and
-/// 235 s with 1e3: each of its four Anderson rounds had settled its set
-/// 4–5 passes before 1e3 was reached.
+/// changing at 1e-3 to 1e-5 of the largest force. A point stuck too early
+/// slips again in the next pass (a flip), which costs passes, never the
+/// answer: the step still ends only on a residual within the force
+/// tolerance itself. That step, untied, traced pass by pass (27 Nov
+/// 2026), stuck the same sets of reversed points (387, 164, 39, 11, 1)
+/// and reached the same final states (504 stick, 13,173 slip, 2,052 open)
+/// in 85 passes and 228.1 s with 1e5, against 103 passes and 236.4 s with
+/// 1e3: each of its four Anderson rounds had settled its set 4–5 passes
+/// before 1e3 was reached.
 const SETTLED_FACTOR: f64 = 1e5;
 /// Cost of one flop of a capacitance column's reach solve
 /// ([`crate::fem::CholeskySolver::reach_cost`]) relative to one flop of
