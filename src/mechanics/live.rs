@@ -65,7 +65,13 @@ pub const NONE: u32 = u32::MAX;
 /// arch's days 870–890 (resumed from one checkpoint, alone on the 2 cores,
 /// 27 Nov 2026) the threshold removed (one core, and the factor made ahead
 /// where it fits [`super::ahead`]'s memory limit) took the same 20 days in
-/// 420 s as both cores: no gain to take.
+/// 420 s as both cores: no gain to take. The untied arch's days 576–618
+/// (its restart point, alone, 27–28 Nov 2026; live sets of 225k–234k
+/// dofs, 177M entries of L) likewise: 420 s as now, 428 s with the next
+/// step's factor made ahead on one core and 426 s on both, beside the
+/// passes (made on every other day, those without a pour at the next
+/// step's start, 8–10 s on one core, never waited for): the passes'
+/// solves, bound by memory, slow down beside it by what it saves.
 pub const PARALLEL_FROM_DOFS: usize = 100_000;
 
 /// One element in the reduced unknowns.
