@@ -64,11 +64,9 @@ pub fn update(p: &Progress, day: f64, end: f64) {
     bar.set_prefix(format!("{day:.0}/{end:.0}"));
 }
 
-/// When the log lines were printed: the day and second of the first
-/// update and of the last line.
+/// When the last log line was printed: its day and second.
 #[derive(Debug, Default)]
 pub struct LogLines {
-    first: Option<(f64, f64)>,
     last: Option<(f64, f64)>,
 }
 
@@ -88,16 +86,14 @@ impl LogLines {
         if !due {
             return None;
         }
-        let first = *self.first.get_or_insert((day, secs));
-        let since = self.last.unwrap_or(first);
-        self.last = Some((day, secs));
+        let since = self.last.replace((day, secs));
         let mut line = format!(
             "day {day:.0} of {end:.0} ({:.0} %), {secs:.0} s",
             (100.0 * day / end).floor()
         );
-        let days = day - since.0;
-        if days > 0.0 {
-            let rate = (secs - since.1) / days;
+        if let Some((d0, s0)) = since.filter(|&(d0, _)| day > d0) {
+            let days = day - d0;
+            let rate = (secs - s0) / days;
             let digits = if rate < 1.0 { 2 } else { 1 };
             line += &format!("; {rate:.digits$} s a day over the last {days:.0} days");
             if day < end {
