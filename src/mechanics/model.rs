@@ -163,6 +163,10 @@ pub struct MechStats {
     pub contact_iterations: usize,
     /// largest tension [Pa] left on a joint point kept closed by the flip limit
     pub kept_closed_tension: f64,
+    /// steps whose normal contact states switched by block pivoting
+    /// (frictional points cycling; `contact_step::BlockPivoting`)
+    #[serde(default)]
+    pub block_pivoting_steps: usize,
     /// why the joint solves factorised
     #[serde(default)]
     pub refactor_reasons: RefactorCounts,
@@ -1096,6 +1100,7 @@ impl MechanicsModel {
         self.stats.contact_iterations += out.iterations;
         self.stats.kept_closed_tension =
             self.stats.kept_closed_tension.max(out.kept_closed_tension);
+        self.stats.block_pivoting_steps += usize::from(out.block_pivoting);
         self.stats.refactor_reasons.add(&out.refactor_reasons);
         self.stats.capacitance.add(&out.capacitance);
         self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
