@@ -105,6 +105,24 @@ impl Health {
     }
 }
 
+/// The joint points, states, passes, factorisations, kept tension and
+/// health of a model after a step, for a test's log line.
+fn contact_summary(m: &MechanicsModel, h: &Health) -> String {
+    format!(
+        "{} joint points ({} open, {} closed), {} contact passes, {} factorisations, \
+         kept-closed tension {:.1e} Pa, residual {:.1e}, complementarity {:.1e} / {:.1e}",
+        m.points.len(),
+        h.open,
+        h.closed,
+        m.stats.contact_iterations,
+        m.stats.numeric,
+        m.stats.kept_closed_tension,
+        h.residual,
+        h.gap,
+        h.force
+    )
+}
+
 fn model_size(mesh: &Mesh) -> f64 {
     let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
     for p in &mesh.nodes {
@@ -1673,19 +1691,11 @@ fn the_complete_dam_loaded_at_once() {
         );
     }
     eprintln!(
-        "complete dam at once: {} elements, {} dofs, {} joint points ({} open, {} closed), {passes} contact passes, \
-         {} factorisations, kept-closed tension {:.1e} Pa, residual {:.1e}, complementarity {:.1e} / {:.1e}, {t_once:.1} s; \
+        "complete dam at once: {} elements, {} dofs, {}, {t_once:.1} s; \
          vs {steps}-step path: apertures differ by {:.1e} of the widest ({:.3} mm), {states_differ} states; total {:.1} s",
         mesh.elements.len(),
         once.live_dofs(),
-        once.points.len(),
-        h.open,
-        h.closed,
-        once.stats.numeric,
-        once.stats.kept_closed_tension,
-        h.residual,
-        h.gap,
-        h.force,
+        contact_summary(&once, &h),
         diff / widest,
         1e3 * widest,
         t.elapsed().as_secs_f64()
@@ -1736,16 +1746,8 @@ fn the_complete_dam_with_friction_loaded_at_once() {
     let h = health(&once, &mesh, mu, 0.0, "at once");
     let passes = once.stats.contact_iterations;
     eprintln!(
-        "complete dam at once, μ = {mu:?}: {} joint points ({} open, {} closed), {passes} contact passes, \
-         {} factorisations, kept-closed tension {:.1e} Pa, residual {:.1e}, complementarity {:.1e} / {:.1e}, {:.1} s",
-        once.points.len(),
-        h.open,
-        h.closed,
-        once.stats.numeric,
-        once.stats.kept_closed_tension,
-        h.residual,
-        h.gap,
-        h.force,
+        "complete dam at once, μ = {mu:?}: {}, {:.1} s",
+        contact_summary(&once, &h),
         t.elapsed().as_secs_f64()
     );
     h.assert_stable("the dam with friction at once");
