@@ -398,7 +398,7 @@ fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::
             groutready::progress::update(&bar, day, end)
         }
         groutready::planner::Progress::Resimulation(what) => {
-            bar.set_message(format!("re-simulating: {what}"))
+            bar.stage(format!("re-simulating: {what}"))
         }
     })
     .with_context(|| format!("planning {}", scene.display()))?;

@@ -35,8 +35,19 @@ pub fn bar(what: &str) -> Progress {
 }
 
 impl Progress {
-    pub fn set_message(&self, what: String) {
+    /// A stage of work with no day count of its own (a plan's remedy
+    /// re-simulations): the bar becomes a spinner saying `what`, where it
+    /// would show the last run's days; in a log, a line.
+    pub fn stage(&self, what: String) {
+        if self.bar.is_hidden() {
+            eprintln!("{what}");
+        }
+        self.bar.set_style(
+            ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("static template"),
+        );
         self.bar.set_message(what);
+        self.bar
+            .enable_steady_tick(std::time::Duration::from_millis(120));
     }
 
     /// Runs `f` (which prints) with the bar out of the way.

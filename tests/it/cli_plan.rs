@@ -60,6 +60,13 @@ fn plan_writes_the_run_folder_exits_3_when_flagged_and_restarts_from_checkpoints
     let stdout = String::from_utf8_lossy(&o.stdout);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{stdout}\n{stderr}");
+    // A log (stderr is not a terminal here) says each remedy re-simulation.
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("re-simulating: supercooling")),
+        "{stderr}"
+    );
     for f in [
         "readiness.csv",
         "report.md",
