@@ -506,6 +506,9 @@ fn active_set(
     let mut last_changes = 0;
     for pass in 1..=s.max_iterations {
         trial.out.iterations = pass;
+        if it.pivoting.is_some() && pass > s.max_iterations / 2 {
+            it = it.restart_without_pivoting(sys, live, s, trial);
+        }
         let pass_refine = Refine {
             to: PASS_REFINE_TO,
             from: None,
@@ -567,6 +570,8 @@ struct ActiveSet {
     pivots_left: usize,
     /// with friction, once a point cycles: how the normal states switch
     pivoting: Option<BlockPivoting>,
+    /// false once the step has restarted without [`BlockPivoting`]
+    may_pivot: bool,
     /// force below which a reaction counts as zero [N]
     tol_f: f64,
     /// gap below which an open point closes [m]
@@ -612,8 +617,8 @@ struct PassOutcome {
 /// the demo's complete dam loaded at once opened and re-closed hundreds of
 /// points per pass and, at the flip limit, kept 500 of its 1,552 points
 /// closed in tension up to 7.7 MPa. Here a pass switches no normal state
-/// until the slip forces have settled ([`SETTLED_FACTOR`]) with no slipping
-/// point moving with its force (`hold`); then every wrong point switches
+/// until the slip forces have settled ([`NORMAL_SETTLED_FACTOR`]) with no
+/// slipping point moving with its force (`hold`); then every wrong point switches
 /// while the count of wrong points reaches a new least within
 /// [`BLOCK_PASSES`] passes, else only the one of least index (`single`),
 /// which ends for a P-matrix (the frictionless normal problem; with
@@ -621,10 +626,11 @@ struct PassOutcome {
 /// complete dam (28 Nov 2026): self-weight at once 88 passes and 10
 /// factorisations against 29 and 12, no tension kept against 7.7 MPa;
 /// weight, water and cooling at once (`hard_cases`) 54 passes, tension 0
-/// against 1.5 MPa. It ends after half the step's passes: on the
-/// Xiaowan-like complete dam under its weight (15,729 points) each round
-/// of normal switches waited 15–55 passes for the friction to settle and
-/// the step had not converged when the flip limit's rule took over.
+/// against 1.5 MPa. Past half the step's passes the step starts again
+/// under the flip limit's rule alone: on the Xiaowan-like complete dam
+/// under its weight (15,729 points) each round of normal switches waited
+/// 15–55 passes for the friction to settle, the step had not ended, and
+/// the restart gave the old answer in 235 passes against 85.
 #[derive(Debug, Clone, Copy)]
 struct BlockPivoting {
     /// least count of wrong normal states after a pass that switched
@@ -710,6 +716,7 @@ impl ActiveSet {
             flips: vec![0usize; live.pairs.len()],
             pending: Vec::new(),
             pivoting: None,
+            may_pivot: true,
             // Least-index switching ends only without friction (see `pivot`).
             pivots_left: if s.mu_static == 0.0 {
                 s.max_iterations / 2
@@ -730,6 +737,25 @@ impl ActiveSet {
             it.factored = Some((p.springs, Capacitance::with_diagonal(p.fixed, p.base_diag)));
             it.m = p.m;
         }
+        it
+    }
+
+    /// The step started again from its first guess under the flip limit's
+    /// rule alone, keeping the factor: [`BlockPivoting`] has not ended in
+    /// half the passes. Continuing from where block pivoting left the
+    /// states did not end either (the Xiaowan-like complete dam: not in
+    /// the 150 passes left, where the rule from the start takes 85).
+    fn restart_without_pivoting(
+        mut self,
+        sys: &StepSystem,
+        live: &LiveSystem,
+        s: &JointSolveSettings,
+        trial: &mut Trial,
+    ) -> Self {
+        let mut it = ActiveSet::start(sys, live, s, trial, None);
+        it.factored = self.factored.take();
+        it.m = self.m;
+        it.may_pivot = false;
         it
     }
 
@@ -1026,9 +1052,9 @@ impl ActiveSet {
     }
 
     /// Starts [`BlockPivoting`] when, with friction, a point has reached
-    /// [`MAX_FLIPS`] (its single switches: half the passes), ends it after
-    /// half the passes (the flip limit's rule then ends the step, as before
-    /// it existed), and decides how this pass switches normal states.
+    /// [`MAX_FLIPS`] (its single switches: half the passes; past them the
+    /// step restarts without it, [`ActiveSet::restart_without_pivoting`]),
+    /// and decides how this pass switches normal states.
     fn choose_pivoting(
         &mut self,
         sys: &StepSystem,
@@ -1038,14 +1064,11 @@ impl ActiveSet {
         x: &[f64],
         kx: &[f64],
     ) {
-        if self.frictionless {
-            return;
-        }
-        let in_time = trial.out.iterations <= s.max_iterations / 2;
-        if !in_time && self.pivoting.take().is_some() {
-            self.pivots_left = 0;
-        }
-        if self.pivoting.is_none() && in_time && self.flips.iter().any(|&f| f >= MAX_FLIPS) {
+        if self.pivoting.is_none()
+            && self.may_pivot
+            && !self.frictionless
+            && self.flips.iter().any(|&f| f >= MAX_FLIPS)
+        {
             self.pivoting = Some(BlockPivoting::new());
             self.pivots_left = s.max_iterations / 2;
             trial.out.block_pivoting = true;

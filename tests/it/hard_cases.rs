@@ -1754,3 +1754,42 @@ fn the_complete_dam_with_friction_loaded_at_once() {
     assert!(h.open > 0 && h.closed > 0, "the joints open and close");
     assert!(passes <= 200, "{passes} passes");
 }
+
+/// The same step with a cap of 104 passes: block pivoting, which takes 54
+/// here, has not ended at half the cap, so the step starts again at pass
+/// 53 under the flip limit's rule alone (47 passes from the start) and
+/// ends with an answer, not an error: the tension that rule keeps is
+/// reported (`kept_closed_tension`) and equilibrium holds.
+///
+/// Break run: continuing the flip limit's rule from where block pivoting
+/// left the states (the first version) ran out of passes on the
+/// Xiaowan-like complete dam (300); a cap of 80 here is too short for the
+/// restart as well (52 + 47 passes) and fails as not converged.
+#[test]
+fn a_step_block_pivoting_cannot_finish_ends_under_the_flip_limit() {
+    let (mut settings, mesh, lifts) = demo_dam();
+    (settings.joint.mu_static, settings.joint.mu_kinetic) = (0.6, 0.5);
+    settings.joint.max_iterations = 104;
+    let supports = Supports::far_boundary(&mesh);
+    let n = mesh.n_thermal_dofs;
+    let mut once = MechanicsModel::new(&mesh, &settings, &supports).unwrap();
+    for &(b, l) in &lifts {
+        once.pour(b, l, 0.0);
+    }
+    once.step(
+        0.0,
+        1.0,
+        Some((&vec![20.0; n], &vec![10.0; n])),
+        Some(mesh.crest_z),
+    )
+    .unwrap();
+    let h = health(&once, &mesh, (0.6, 0.5), 0.0, "at once, capped");
+    eprintln!("capped at 104 passes: {}", contact_summary(&once, &h));
+    assert_eq!(once.stats.block_pivoting_steps, 1);
+    assert!(once.stats.contact_iterations > 52);
+    assert!(h.residual <= RESIDUAL_MAX, "residual {:.2e}", h.residual);
+    assert!(
+        once.stats.kept_closed_tension > 0.0,
+        "the flip limit's rule ended it"
+    );
+}
