@@ -1719,30 +1719,41 @@ fn the_complete_dam_loaded_at_once() {
 /// closed in tension), no NaN, a bounded number of passes.
 ///
 /// Break run: before the block pivoting of cycling steps
-/// (`ActiveSet::block_pivoting`), the flip limit kept 500 of the 1,552
+/// (`BlockPivoting` in `contact_step.rs`), the flip limit kept 500 of the 1,552
 /// points closed, in tension up to 7.7 MPa (29 passes, 12 factorisations)
 /// and it failed on the force complementarity.
-#[test]
-fn the_complete_dam_with_friction_loaded_at_once() {
-    let t = std::time::Instant::now();
+/// The demo's joint friction (μ_s, μ_k).
+const DEMO_FRICTION: (f64, f64) = (0.6, 0.5);
+
+/// The demo dam of [`demo_dam`] with [`DEMO_FRICTION`] after one step from
+/// every lift born: its weight, the reservoir full to the crest and a
+/// uniform 10 °C cooling, at most `max_passes` contact passes.
+fn demo_dam_with_friction_at_once(max_passes: usize) -> (MechanicsModel, Mesh) {
     let (mut settings, mesh, lifts) = demo_dam();
-    let mu = (0.6, 0.5);
-    (settings.joint.mu_static, settings.joint.mu_kinetic) = mu;
-    // the cap `study perf` gives its complete-dam step (a scene's is 60)
-    settings.joint.max_iterations = 300;
+    (settings.joint.mu_static, settings.joint.mu_kinetic) = DEMO_FRICTION;
+    settings.joint.max_iterations = max_passes;
     let supports = Supports::far_boundary(&mesh);
     let n = mesh.n_thermal_dofs;
-    let mut once = MechanicsModel::new(&mesh, &settings, &supports).unwrap();
+    let mut m = MechanicsModel::new(&mesh, &settings, &supports).unwrap();
     for &(b, l) in &lifts {
-        once.pour(b, l, 0.0);
+        m.pour(b, l, 0.0);
     }
-    once.step(
+    m.step(
         0.0,
         1.0,
         Some((&vec![20.0; n], &vec![10.0; n])),
         Some(mesh.crest_z),
     )
     .unwrap();
+    (m, mesh)
+}
+
+#[test]
+fn the_complete_dam_with_friction_loaded_at_once() {
+    let t = std::time::Instant::now();
+    let mu = DEMO_FRICTION;
+    // the cap `study perf` gives its complete-dam step (a scene's is 60)
+    let (once, mesh) = demo_dam_with_friction_at_once(300);
     let h = health(&once, &mesh, mu, 0.0, "at once");
     let passes = once.stats.contact_iterations;
     eprintln!(
@@ -1767,23 +1778,8 @@ fn the_complete_dam_with_friction_loaded_at_once() {
 /// restart as well (52 + 47 passes) and fails as not converged.
 #[test]
 fn a_step_block_pivoting_cannot_finish_ends_under_the_flip_limit() {
-    let (mut settings, mesh, lifts) = demo_dam();
-    (settings.joint.mu_static, settings.joint.mu_kinetic) = (0.6, 0.5);
-    settings.joint.max_iterations = 104;
-    let supports = Supports::far_boundary(&mesh);
-    let n = mesh.n_thermal_dofs;
-    let mut once = MechanicsModel::new(&mesh, &settings, &supports).unwrap();
-    for &(b, l) in &lifts {
-        once.pour(b, l, 0.0);
-    }
-    once.step(
-        0.0,
-        1.0,
-        Some((&vec![20.0; n], &vec![10.0; n])),
-        Some(mesh.crest_z),
-    )
-    .unwrap();
-    let h = health(&once, &mesh, (0.6, 0.5), 0.0, "at once, capped");
+    let (once, mesh) = demo_dam_with_friction_at_once(104);
+    let h = health(&once, &mesh, DEMO_FRICTION, 0.0, "at once, capped");
     eprintln!("capped at 104 passes: {}", contact_summary(&once, &h));
     assert_eq!(once.stats.block_pivoting_steps, 1);
     assert!(once.stats.contact_iterations > 52);
