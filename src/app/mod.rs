@@ -354,9 +354,10 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
     }
     if let Some(m) = &stats.mechanics {
         s += &format!(
-            "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes, max live dofs {} ({} free, the others supported)\n",
-            m.steps, m.symbolic, m.numeric, m.contact_iterations, m.max_dofs, m.max_free_dofs
+            "mechanics: {} steps, {} symbolic, {} numeric factorisations, {} contact passes ({} steps pivoting in blocks), max live dofs {} ({} free, the others supported)\n",
+            m.steps, m.symbolic, m.numeric, m.contact_iterations, m.block_pivoting_steps, m.max_dofs, m.max_free_dofs
         );
+        s += &m.kept_tension_warning();
     }
     for w in inputs.warnings.iter().chain(&stats.warnings) {
         s += &format!("warning: {w}\n");

@@ -396,6 +396,34 @@ fn start_gap(old: &JointPointState, guess: &JointPointState) -> f64 {
     }
 }
 
+/// The contact reaction and the gap of each live pair at a pass's solution
+/// `x`: r = r_old + K̃x − b on the pair's relative rows (a supported row
+/// carries a support reaction, not contact: zero), g = g_start + x_n.
+fn pass_reactions(
+    sys: &StepSystem,
+    live: &LiveSystem,
+    trial: &Trial,
+    x: &[f64],
+) -> Vec<([f64; 3], f64)> {
+    let mut kx = vec![0.0; live.n];
+    sys.a.mul_vec(x, &mut kx);
+    live.pairs
+        .iter()
+        .map(|pair| {
+            let (p, f) = (pair.point as usize, pair.first as usize);
+            let old = &trial.old[p];
+            let reaction = std::array::from_fn(|k| {
+                if live.supported[f + k] {
+                    0.0
+                } else {
+                    old.force[k] + kx[f + k] - sys.b[f + k]
+                }
+            });
+            (reaction, start_gap(old, &trial.work[p]) + x[f + 2])
+        })
+        .collect()
+}
+
 fn norm2(v: [f64; 2]) -> f64 {
     (v[0] * v[0] + v[1] * v[1]).sqrt()
 }
@@ -563,6 +591,8 @@ struct ActiveSet {
     mu_kinetic: f64,
     /// open ↔ closed and slip → stick switches so far, per live pair
     flips: Vec<usize>,
+    /// a point has reached [`MAX_FLIPS`]
+    cycling: bool,
     /// cycling points (at the flip limit) whose normal state this pass
     /// found wrong: the one of least index switches (Murty's rule)
     pending: Vec<usize>,
@@ -714,6 +744,7 @@ impl ActiveSet {
             coupled_in_pass: vec![false; live.pairs.len()],
             mu_kinetic: s.mu_kinetic,
             flips: vec![0usize; live.pairs.len()],
+            cycling: false,
             pending: Vec::new(),
             pivoting: None,
             may_pivot: true,
@@ -973,31 +1004,21 @@ impl ActiveSet {
         trial: &mut Trial,
         x: &[f64],
     ) -> PassOutcome {
-        let mut kx = vec![0.0; live.n];
-        sys.a.mul_vec(x, &mut kx);
-        self.choose_pivoting(sys, live, s, trial, x, &kx);
+        let at = pass_reactions(sys, live, trial, x);
+        self.choose_pivoting(live, s, trial, &at);
         let mut outcome = PassOutcome {
             changes: 0,
             mapped: self.slip_force.clone(),
             reversed: Vec::new(),
             held: 0,
         };
-        for (q, pair) in live.pairs.iter().enumerate() {
+        for (q, (pair, &(reaction, gap))) in live.pairs.iter().zip(&at).enumerate() {
             let p = pair.point as usize;
             let f = pair.first as usize;
-            let old = &trial.old[p];
-            let (r_old, g_old) = (old.force, start_gap(old, &trial.work[p]));
+            let r_old = trial.old[p].force;
             let xd = [x[f], x[f + 1], x[f + 2]];
-            // Supported relative components carry support reactions, not contact.
-            let reaction: [f64; 3] = std::array::from_fn(|k| {
-                if live.supported[f + k] {
-                    0.0
-                } else {
-                    r_old[k] + kx[f + k] - sys.b[f + k]
-                }
-            });
             let st = &mut trial.work[p];
-            st.gap = g_old + xd[2];
+            st.gap = gap;
             match st.state {
                 PointState::Open => {
                     st.force = [0.0; 3];
@@ -1005,7 +1026,7 @@ impl ActiveSet {
                         // Out of single switches, a cycling point closes
                         // as before the limit: the closed state ends the cycle.
                         if !self.held(q) || self.may_only_close() {
-                            self.flips[q] += 1;
+                            self.flip(q);
                             st.state = self.closed_state();
                             outcome.changes += 1;
                         } else {
@@ -1023,6 +1044,12 @@ impl ActiveSet {
         }
         self.pivot(live, trial, &mut outcome);
         outcome
+    }
+
+    /// One more open ↔ closed or slip → stick switch of `q`.
+    fn flip(&mut self, q: usize) {
+        self.flips[q] += 1;
+        self.cycling |= self.flips[q] >= MAX_FLIPS;
     }
 
     /// Slip-force residual, in force tolerances, at which the reversed
@@ -1054,21 +1081,16 @@ impl ActiveSet {
     /// Starts [`BlockPivoting`] when, with friction, a point has reached
     /// [`MAX_FLIPS`] (its single switches: half the passes; past them the
     /// step restarts without it, [`ActiveSet::restart_without_pivoting`]),
-    /// and decides how this pass switches normal states.
+    /// and decides how this pass switches normal states from the pass's
+    /// reactions and gaps `at`.
     fn choose_pivoting(
         &mut self,
-        sys: &StepSystem,
         live: &LiveSystem,
         s: &JointSolveSettings,
         trial: &mut Trial,
-        x: &[f64],
-        kx: &[f64],
+        at: &[([f64; 3], f64)],
     ) {
-        if self.pivoting.is_none()
-            && self.may_pivot
-            && !self.frictionless
-            && self.flips.iter().any(|&f| f >= MAX_FLIPS)
-        {
+        if self.pivoting.is_none() && self.may_pivot && !self.frictionless && self.cycling {
             self.pivoting = Some(BlockPivoting::new());
             self.pivots_left = s.max_iterations / 2;
             trial.out.block_pivoting = true;
@@ -1079,34 +1101,30 @@ impl ActiveSet {
         b.hold = !b.settled;
         b.settled = false;
         if !b.hold {
-            b.choose(self.wrong_normal_states(sys, live, trial, x, kx));
+            b.choose(self.wrong_normal_states(live, trial, at));
         }
         self.pivoting = Some(b);
     }
 
-    /// Points whose normal state the pass's solution `x` finds wrong:
-    /// closed in tension, or open with an overlap.
+    /// Points whose normal state the pass finds wrong: closed in tension,
+    /// or open with an overlap.
     fn wrong_normal_states(
         &self,
-        sys: &StepSystem,
         live: &LiveSystem,
         trial: &Trial,
-        x: &[f64],
-        kx: &[f64],
+        at: &[([f64; 3], f64)],
     ) -> usize {
-        let wrong = |pair: &&super::live::LivePair| {
-            let (p, f) = (pair.point as usize, pair.first as usize);
-            let (old, st) = (&trial.old[p], &trial.work[p]);
-            match st.state {
-                _ if live.supported[f + 2] => false,
-                PointState::Open => start_gap(old, st) + x[f + 2] < -self.tol_g,
-                PointState::Stick | PointState::Slip => {
-                    old.force[2] + kx[f + 2] - sys.b[f + 2] < -self.tol_f
-                }
+        let wrong =
+            |(pair, &(reaction, gap)): (&super::live::LivePair, &([f64; 3], f64))| match trial.work
+                [pair.point as usize]
+                .state
+            {
+                _ if live.supported[pair.first as usize + 2] => false,
+                PointState::Open => gap < -self.tol_g,
+                PointState::Stick | PointState::Slip => reaction[2] < -self.tol_f,
                 PointState::Grouted => false,
-            }
-        };
-        live.pairs.iter().filter(wrong).count()
+            };
+        live.pairs.iter().zip(at).filter(|&pa| wrong(pa)).count()
     }
 
     /// The state a point closes in.
@@ -1144,7 +1162,7 @@ impl ActiveSet {
             return;
         }
         self.pivots_left -= 1;
-        self.flips[q] += 1;
+        self.flip(q);
         let st = &mut trial.work[live.pairs[q].point as usize];
         st.state = if st.state == PointState::Open {
             self.closed_state()
@@ -1173,7 +1191,7 @@ impl ActiveSet {
             self.pending.push(q);
         }
         if tension && !self.held(q) {
-            self.flips[q] += 1;
+            self.flip(q);
             st.state = PointState::Open;
             outcome.changes += 1;
         } else if norm2(rt) > self.limit[q] * reaction[2].max(0.0) + self.tol_f {
@@ -1224,7 +1242,7 @@ impl ActiveSet {
             self.pending.push(q);
         }
         if tension && !self.held(q) {
-            self.flips[q] += 1;
+            self.flip(q);
             st.state = PointState::Open;
             outcome.changes += 1;
         } else {
@@ -1291,7 +1309,7 @@ impl ActiveSet {
         } else if !reversed.is_empty() && residual <= self.tol_f * self.settled_factor() {
             for &q in &reversed {
                 trial.work[live.pairs[q].point as usize].state = PointState::Stick;
-                self.flips[q] += 1;
+                self.flip(q);
             }
             self.anderson.clear();
             Some(reversed.len())

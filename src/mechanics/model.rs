@@ -189,6 +189,20 @@ impl MechStats {
         self.numeric_flops += n as f64 * flops_each;
         self.seconds_numeric += seconds;
     }
+
+    /// A warning line when a contact step ended with joint points held
+    /// closed in tension at the flip limit (`contact_step::MAX_FLIPS`): the
+    /// apertures beside them are not an equilibrium answer. Empty otherwise.
+    pub fn kept_tension_warning(&self) -> String {
+        if self.kept_closed_tension > 0.0 {
+            format!(
+                "warning: a contact step kept joint points closed in tension up to {:.3} MPa (their open/closed state cycled to the flip limit); the apertures beside them are not an equilibrium answer\n",
+                self.kept_closed_tension / 1e6
+            )
+        } else {
+            String::new()
+        }
+    }
 }
 
 /// Checkpointable mechanical state.

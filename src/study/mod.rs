@@ -29,9 +29,10 @@ pub fn summary_line(s: &RunSummary) -> String {
     }
     if let Some(m) = &s.stats.mechanics {
         out += &format!(
-            "mechanics: {} steps, {} numeric factorisations, {} contact passes; apertures.csv {} rows\n",
-            m.steps, m.numeric, m.contact_iterations, s.aperture_rows
+            "mechanics: {} steps, {} numeric factorisations, {} contact passes ({} steps pivoting in blocks); apertures.csv {} rows\n",
+            m.steps, m.numeric, m.contact_iterations, m.block_pivoting_steps, s.aperture_rows
         );
+        out += &m.kept_tension_warning();
     }
     out
 }
