@@ -1424,4 +1424,16 @@ mod tests {
             .creep
             .is_empty());
     }
+
+    #[test]
+    fn tension_kept_closed_is_warned_of_in_megapascals() {
+        let mut m = MechStats::default();
+        assert_eq!(m.kept_tension_warning(), "");
+        m.kept_closed_tension = 1.5e6;
+        let w = m.kept_tension_warning();
+        assert!(
+            w.starts_with("warning: ") && w.contains("up to 1.500 MPa"),
+            "{w}"
+        );
+    }
 }
