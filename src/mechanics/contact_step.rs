@@ -1114,17 +1114,15 @@ impl ActiveSet {
         trial: &Trial,
         at: &[([f64; 3], f64)],
     ) -> usize {
-        let wrong =
-            |(pair, &(reaction, gap)): (&super::live::LivePair, &([f64; 3], f64))| match trial.work
-                [pair.point as usize]
-                .state
-            {
-                _ if live.supported[pair.first as usize + 2] => false,
-                PointState::Open => gap < -self.tol_g,
-                PointState::Stick | PointState::Slip => reaction[2] < -self.tol_f,
-                PointState::Grouted => false,
-            };
-        live.pairs.iter().zip(at).filter(|&pa| wrong(pa)).count()
+        let wrong = |&(pair, &(reaction, gap)): &(&super::live::LivePair, &([f64; 3], f64))| {
+            !live.supported[pair.first as usize + 2]
+                && match trial.work[pair.point as usize].state {
+                    PointState::Open => gap < -self.tol_g,
+                    PointState::Stick | PointState::Slip => reaction[2] < -self.tol_f,
+                    PointState::Grouted => false,
+                }
+        };
+        live.pairs.iter().zip(at).filter(wrong).count()
     }
 
     /// The state a point closes in.
