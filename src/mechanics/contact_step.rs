@@ -1022,7 +1022,7 @@ impl ActiveSet {
             match st.state {
                 PointState::Open => {
                     st.force = [0.0; 3];
-                    if st.gap < -self.tol_g {
+                    if self.overlaps(st.gap) {
                         // Out of single switches, a cycling point closes
                         // as before the limit: the closed state ends the cycle.
                         if !self.held(q) || self.may_only_close() {
@@ -1044,6 +1044,16 @@ impl ActiveSet {
         }
         self.pivot(live, trial, &mut outcome);
         outcome
+    }
+
+    /// An open point whose gap overlaps: it should close.
+    fn overlaps(&self, gap: f64) -> bool {
+        gap < -self.tol_g
+    }
+
+    /// A closed point pulled apart: it should open.
+    fn in_tension(&self, reaction: [f64; 3]) -> bool {
+        reaction[2] < -self.tol_f
     }
 
     /// One more open ↔ closed or slip → stick switch of `q`.
@@ -1117,8 +1127,8 @@ impl ActiveSet {
         let wrong = |&(pair, &(reaction, gap)): &(&super::live::LivePair, &([f64; 3], f64))| {
             !live.supported[pair.first as usize + 2]
                 && match trial.work[pair.point as usize].state {
-                    PointState::Open => gap < -self.tol_g,
-                    PointState::Stick | PointState::Slip => reaction[2] < -self.tol_f,
+                    PointState::Open => self.overlaps(gap),
+                    PointState::Stick | PointState::Slip => self.in_tension(reaction),
                     PointState::Grouted => false,
                 }
         };
@@ -1184,7 +1194,7 @@ impl ActiveSet {
         st.force = reaction;
         st.gap = 0.0;
         let rt = [reaction[0], reaction[1]];
-        let tension = reaction[2] < -self.tol_f;
+        let tension = self.in_tension(reaction);
         if tension && self.held(q) {
             self.pending.push(q);
         }
@@ -1229,7 +1239,7 @@ impl ActiveSet {
         } else {
             0.0
         };
-        let tension = reaction[2] < -self.tol_f;
+        let tension = self.in_tension(reaction);
         if reaction[2] < 0.0 && self.coupled_in_pass[q] {
             // no friction force in tension: held at μ_k max(r_n, 0) = 0
             // by the fixed point from here on
