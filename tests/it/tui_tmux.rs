@@ -141,7 +141,7 @@ fn tui_in_tmux_shows_the_demo_a_flagged_zone_and_exits_cleanly() {
         "{s}"
     );
     assert!(s.contains("seen from upstream") && s.contains("left bank → right bank"));
-    assert!(s.contains("✗0.40"), "the flagged zone 5 of joint 5: {s}");
+    assert!(s.contains("✗0.64"), "the flagged zone 5 of joint 5: {s}");
     // The flagged list, then Enter on its first zone.
     t.keys(&["2"]);
     let s = t.wait_for("the flagged list", 10, |s| {
@@ -155,7 +155,10 @@ fn tui_in_tmux_shows_the_demo_a_flagged_zone_and_exits_cleanly() {
         s.contains("Joint 5 zone 5") && s.contains("✗ not groutable"),
         "{s}"
     );
-    assert!(s.contains("✗ aperture") && s.contains("delay"), "{s}");
+    assert!(
+        s.contains("✓ aperture") && s.contains("✗ warmer block") && s.contains("delay"),
+        "{s}"
+    );
     // A resize redraws at the new size.
     assert!(t
         .cmd(&["resize-window", "-t", "tui", "-x", "100", "-y", "30"])
