@@ -44,6 +44,8 @@ pub mod rock_ties;
 pub mod settings;
 pub mod supports;
 
-pub use model::{MechError, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum};
+pub use model::{
+    JointReading, MechError, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum,
+};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};
 pub use supports::SupportError;

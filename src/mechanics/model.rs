@@ -103,13 +103,25 @@ impl Supports {
     }
 }
 
+/// The joint read at one site: what a joint meter and a pressure cell
+/// set there would show.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointReading {
+    /// aperture [m]
+    pub aperture: f64,
+    pub state: JointState,
+    /// normal stress across the joint [Pa], tension positive: the contact
+    /// pressure of a closed joint (negative), the grout layer's stress
+    /// once grouted, 0 where open. The joint points' normal forces over
+    /// their tributary areas, interpolated like the aperture.
+    pub normal_stress: f64,
+}
+
 /// A zone's smallest aperture inside its grout stops
 /// ([`MechanicsModel::zone_min_aperture`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ZoneMinimum {
-    /// aperture [m]
-    pub aperture: f64,
-    pub state: JointState,
+    pub reading: JointReading,
     /// the side-a nodes the aperture is interpolated between, with their
     /// weights (the second weight is 0 at a node): the temperature there is
     /// read with the same weights
@@ -1268,13 +1280,15 @@ impl MechanicsModel {
         (r2.sqrt(), f2.sqrt().max(scale).max(f64::MIN_POSITIVE))
     }
 
-    /// Aperture [m] and state label at a grouting-zone point (bilinear over
-    /// the joint points of its face; a node shared with the rock is closed).
+    /// The joint at a grouting-zone point: aperture, state label and
+    /// normal stress, bilinear over the joint points of its face (a node
+    /// shared with the rock is closed, and carries no stress of the joint's).
     /// None until both blocks exist there.
-    pub fn point_aperture(&self, mesh: &Mesh, zp: &ZoneSite) -> Option<(f64, JointState)> {
+    pub fn point_aperture(&self, mesh: &Mesh, zp: &ZoneSite) -> Option<JointReading> {
         let pair = &mesh.face_pairs[zp.pair as usize];
         let n = crate::fem::quad4::shape([zp.s, zp.t]);
         let (mut value, mut label, mut best) = (0.0, JointState::Stick, -1.0);
+        let (mut stress, mut weight) = (0.0, 0.0);
         for (k, &nk) in n.iter().enumerate() {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
@@ -1285,12 +1299,24 @@ impl MechanicsModel {
                 return None;
             }
             value += nk * st.aperture();
+            stress += nk * self.normal_stress(p);
+            weight += nk;
             if nk > best {
                 best = nk;
                 label = st.label();
             }
         }
-        Some((value, label))
+        Some(JointReading {
+            aperture: value,
+            state: label,
+            normal_stress: if weight > 0.0 { stress / weight } else { 0.0 },
+        })
+    }
+
+    /// Normal stress [Pa] at joint point `p`, tension positive: its normal
+    /// force (which presses side B when positive) over its tributary area.
+    fn normal_stress(&self, p: usize) -> f64 {
+        -self.state.joints[p].force[2] / self.points[p].area
     }
 
     /// The zone's smallest aperture inside its grout stops: the minimum of
@@ -1301,7 +1327,7 @@ impl MechanicsModel {
             .get(&(joint, zone))?
             .iter()
             .filter_map(|s| self.sample_aperture(s))
-            .min_by(|x, y| x.aperture.total_cmp(&y.aperture))
+            .min_by(|x, y| x.reading.aperture.total_cmp(&y.reading.aperture))
     }
 
     /// The aperture field at one sample, with its state: the heavier
@@ -1325,10 +1351,16 @@ impl MechanicsModel {
         {
             state = JointState::Open;
         }
+        let normal_stress = (0..used)
+            .map(|k| s.weights[k] * self.normal_stress(s.points[k] as usize))
+            .sum();
         let node = |k: usize| self.points[s.points[k] as usize].a;
         Some(ZoneMinimum {
-            aperture,
-            state,
+            reading: JointReading {
+                aperture,
+                state,
+                normal_stress,
+            },
             nodes: [(node(0), s.weights[0]), (node(1), s.weights[1])],
         })
     }

@@ -1,7 +1,11 @@
-//! `apertures.csv`: `joint,zone,point,date,day,aperture_mm,state,temperature_c`,
+//! `apertures.csv`:
+//! `joint,zone,point,date,day,aperture_mm,state,temperature_c,normal_stress_mpa`,
 //! for every grouting zone at its upstream, center and downstream points
 //! (mid-zone height) and its minimum over the zone's joint points (`min`;
-//! its temperature is that point's).
+//! its temperature and stress are that point's). The normal stress across
+//! the joint is tension positive: a closed joint's contact pressure is
+//! negative, and how far below zero says how much more cooling it takes to
+//! open it (about σ / (E α) degrees).
 //!
 //! Rows are written weekly (days that are multiples of 7 from the epoch),
 //! on every grouting date and snapshot date, and on the last day; days before
@@ -25,7 +29,7 @@ pub fn write(
     let mut w = io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(
         w,
-        "joint,zone,point,date,day,aperture_mm,state,temperature_c"
+        "joint,zone,point,date,day,aperture_mm,state,temperature_c,normal_stress_mpa"
     )?;
     let last = records.rows.last().map(|r| r.0);
     let keep = |day: Day| day.0 % 7 == 0 || extra_days.contains(&day) || Some(day) == last;
@@ -36,6 +40,9 @@ pub fn write(
             let Some(s) = samples[i] else { continue };
             let date = epoch.date(day);
             let day = day.0;
+            // rounded to the column's 4 decimals without a "-0.0000"
+            let mpa = 1e-6 * s.normal_stress;
+            let mpa = if mpa.abs() < 5e-5 { 0.0 } else { mpa };
             let temp = if s.temperature.is_nan() {
                 String::new()
             } else {
@@ -43,10 +50,11 @@ pub fn write(
             };
             writeln!(
                 w,
-                "{joint},{zone},{},{date},{day},{:.4},{},{temp}",
+                "{joint},{zone},{},{date},{day},{:.4},{},{temp},{:.4}",
                 col.point.as_str(),
                 1e3 * s.aperture,
-                s.state
+                s.state,
+                mpa
             )?;
             rows += 1;
         }

@@ -91,12 +91,15 @@ pub struct JointColumn {
     pub site: Option<u32>,
 }
 
-/// One joint sample: aperture [m], state, temperature [°C] (NaN without a thermal model).
+/// One joint sample: aperture [m], state, temperature [°C] (NaN without a
+/// thermal model), normal stress across the joint [Pa] (tension positive;
+/// [`crate::mechanics::JointReading`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointSample {
     pub aperture: f64,
     pub state: JointState,
     pub temperature: f64,
+    pub normal_stress: f64,
 }
 
 /// Aperture history at the grouting-zone points and zone minima, one row
@@ -593,23 +596,24 @@ impl<'a> Simulation<'a> {
             let sample = match col.site {
                 Some(index) => {
                     let zp = &self.mesh.zone_points[index as usize];
-                    m.point_aperture(self.mesh, zp)
-                        .map(|(aperture, state)| JointSample {
-                            aperture,
-                            state,
-                            temperature: self
-                                .thermal
-                                .as_ref()
-                                .zip(live.as_deref())
-                                .and_then(|(th, live)| th.point_temperature(self.mesh, zp, live))
-                                .unwrap_or(f64::NAN),
-                        })
+                    m.point_aperture(self.mesh, zp).map(|r| JointSample {
+                        aperture: r.aperture,
+                        state: r.state,
+                        normal_stress: r.normal_stress,
+                        temperature: self
+                            .thermal
+                            .as_ref()
+                            .zip(live.as_deref())
+                            .and_then(|(th, live)| th.point_temperature(self.mesh, zp, live))
+                            .unwrap_or(f64::NAN),
+                    })
                 }
                 None => m
                     .zone_min_aperture(col.zone.joint, col.zone.zone)
                     .map(|z| JointSample {
-                        aperture: z.aperture,
-                        state: z.state,
+                        aperture: z.reading.aperture,
+                        state: z.reading.state,
+                        normal_stress: z.reading.normal_stress,
                         temperature: z
                             .nodes
                             .iter()

@@ -74,7 +74,7 @@ fn opened(across: u32, inset: Option<f64>) -> Vec<(f64, JointState)> {
     (1..=2)
         .map(|z| {
             let min = m.zone_min_aperture(1, z).unwrap();
-            (min.aperture, min.state)
+            (min.reading.aperture, min.reading.state)
         })
         .collect()
 }

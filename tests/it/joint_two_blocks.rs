@@ -41,7 +41,7 @@ fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
 
 #[test]
 fn cooled_blocks_open_the_joint_by_their_free_contraction_without_stress() {
-    let (m, _) = run(-10.0, 0.0);
+    let (m, mesh) = run(-10.0, 0.0);
     let expected = -ALPHA * -10.0 * (2.0 * L_BLOCK);
     assert!(!m.points.is_empty());
     for st in &m.state.joints {
@@ -68,12 +68,16 @@ fn cooled_blocks_open_the_joint_by_their_free_contraction_without_stress() {
         "cooled: aperture {:.6} mm, largest stress {worst:.2e} Pa",
         1e3 * m.state.joints[0].gap
     );
+    for r in zone_readings(&m, &mesh) {
+        assert_eq!(r.normal_stress, 0.0, "an open joint carries no stress");
+        assert!((r.aperture - expected).abs() < 1e-9 * expected);
+    }
 }
 
 #[test]
 fn heated_past_closure_the_blocks_press_with_the_closed_form_stress() {
     let g0 = 0.5e-3;
-    let (m, _) = run(10.0, g0);
+    let (m, mesh) = run(10.0, g0);
     let l = 2.0 * L_BLOCK;
     let expected = -E * (ALPHA * 10.0 * l - g0) / l;
     let mut worst: f64 = 0.0;
@@ -96,6 +100,25 @@ fn heated_past_closure_the_blocks_press_with_the_closed_form_stress() {
     );
     assert!(worst < 1e-6, "σxx off by {worst:.2e}");
     assert!(m.equilibrium_residual() < 1e-8);
+    // What a pressure cell in the joint reads (apertures.csv's
+    // normal_stress_mpa): the same σxx, at every zone point.
+    let readings = zone_readings(&m, &mesh);
+    for r in &readings {
+        assert!(
+            (r.normal_stress - expected).abs() < 1e-6 * expected.abs(),
+            "joint normal stress {} against σxx {expected}",
+            r.normal_stress
+        );
+    }
+}
+
+/// The joint read at each grouting-zone point of the mesh.
+fn zone_readings(m: &MechanicsModel, mesh: &Mesh) -> Vec<groutready::mechanics::JointReading> {
+    assert!(!mesh.zone_points.is_empty());
+    mesh.zone_points
+        .iter()
+        .map(|zp| m.point_aperture(mesh, zp).expect("both blocks exist"))
+        .collect()
 }
 
 #[test]
