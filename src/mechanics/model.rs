@@ -110,11 +110,12 @@ pub struct JointReading {
     /// aperture [m]
     pub aperture: f64,
     pub state: JointState,
-    /// normal stress across the joint [Pa], tension positive: the contact
-    /// pressure of a closed joint (negative), the grout layer's stress
+    /// pressure across the joint [Pa], compression positive: the contact
+    /// pressure of a closed joint, the grout layer's (negative in tension)
     /// once grouted, 0 where open. The joint points' normal forces over
-    /// their tributary areas, interpolated like the aperture.
-    pub normal_stress: f64,
+    /// their tributary areas ([`MechanicsModel::joint_pressure`]),
+    /// interpolated like the aperture.
+    pub pressure: f64,
 }
 
 /// A zone's smallest aperture inside its grout stops
@@ -1281,14 +1282,14 @@ impl MechanicsModel {
     }
 
     /// The joint at a grouting-zone point: aperture, state label and
-    /// normal stress, bilinear over the joint points of its face (a node
+    /// pressure, bilinear over the joint points of its face (a node
     /// shared with the rock is closed, and carries no stress of the joint's).
     /// None until both blocks exist there.
     pub fn point_aperture(&self, mesh: &Mesh, zp: &ZoneSite) -> Option<JointReading> {
         let pair = &mesh.face_pairs[zp.pair as usize];
         let n = crate::fem::quad4::shape([zp.s, zp.t]);
         let (mut value, mut label, mut best) = (0.0, JointState::Stick, -1.0);
-        let (mut stress, mut weight) = (0.0, 0.0);
+        let (mut pressure, mut weight) = (0.0, 0.0);
         for (k, &nk) in n.iter().enumerate() {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
@@ -1299,7 +1300,7 @@ impl MechanicsModel {
                 return None;
             }
             value += nk * st.aperture();
-            stress += nk * self.normal_stress(p);
+            pressure += nk * self.joint_pressure(p);
             weight += nk;
             if nk > best {
                 best = nk;
@@ -1309,14 +1310,16 @@ impl MechanicsModel {
         Some(JointReading {
             aperture: value,
             state: label,
-            normal_stress: if weight > 0.0 { stress / weight } else { 0.0 },
+            pressure: if weight > 0.0 { pressure / weight } else { 0.0 },
         })
     }
 
-    /// Normal stress [Pa] at joint point `p`, tension positive: its normal
-    /// force (which presses side B when positive) over its tributary area.
-    fn normal_stress(&self, p: usize) -> f64 {
-        -self.state.joints[p].force[2] / self.points[p].area
+    /// Pressure across the joint [Pa] at joint point `p`, compression
+    /// positive: its normal force (which presses side B when positive) over
+    /// its tributary area; exact for a uniform traction on the bilinear
+    /// joint faces.
+    pub fn joint_pressure(&self, p: usize) -> f64 {
+        self.state.joints[p].force[2] / self.points[p].area
     }
 
     /// The zone's smallest aperture inside its grout stops: the minimum of
@@ -1351,15 +1354,15 @@ impl MechanicsModel {
         {
             state = JointState::Open;
         }
-        let normal_stress = (0..used)
-            .map(|k| s.weights[k] * self.normal_stress(s.points[k] as usize))
+        let pressure = (0..used)
+            .map(|k| s.weights[k] * self.joint_pressure(s.points[k] as usize))
             .sum();
         let node = |k: usize| self.points[s.points[k] as usize].a;
         Some(ZoneMinimum {
             reading: JointReading {
                 aperture,
                 state,
-                normal_stress,
+                pressure,
             },
             nodes: [(node(0), s.weights[0]), (node(1), s.weights[1])],
         })

@@ -1,11 +1,11 @@
 //! `apertures.csv`:
-//! `joint,zone,point,date,day,aperture_mm,state,temperature_c,normal_stress_mpa`,
+//! `joint,zone,point,date,day,aperture_mm,state,temperature_c,pressure_mpa`,
 //! for every grouting zone at its upstream, center and downstream points
 //! (mid-zone height) and its minimum over the zone's joint points (`min`;
-//! its temperature and stress are that point's). The normal stress across
-//! the joint is tension positive: a closed joint's contact pressure is
-//! negative, and how far below zero says how much more cooling it takes to
-//! open it (about σ / (E α) degrees).
+//! its temperature and pressure are that point's). The pressure across the
+//! joint is compression positive (the VTU's `joint_pressure_mpa`): a closed
+//! joint's contact pressure says how much more cooling it takes to open it
+//! (about p / (E α) degrees); a grout layer in tension reads negative.
 //!
 //! Rows are written weekly (days that are multiples of 7 from the epoch),
 //! on every grouting date and snapshot date, and on the last day; days before
@@ -29,7 +29,7 @@ pub fn write(
     let mut w = io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(
         w,
-        "joint,zone,point,date,day,aperture_mm,state,temperature_c,normal_stress_mpa"
+        "joint,zone,point,date,day,aperture_mm,state,temperature_c,pressure_mpa"
     )?;
     let last = records.rows.last().map(|r| r.0);
     let keep = |day: Day| day.0 % 7 == 0 || extra_days.contains(&day) || Some(day) == last;
@@ -41,7 +41,7 @@ pub fn write(
             let date = epoch.date(day);
             let day = day.0;
             // rounded to the column's 4 decimals without a "-0.0000"
-            let mpa = 1e-6 * s.normal_stress;
+            let mpa = 1e-6 * s.pressure;
             let mpa = if mpa.abs() < 5e-5 { 0.0 } else { mpa };
             let temp = if s.temperature.is_nan() {
                 String::new()

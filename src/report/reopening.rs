@@ -153,7 +153,7 @@ mod tests {
             aperture: aperture_mm * 1e-3,
             state,
             temperature: f64::NAN,
-            normal_stress: 0.0,
+            pressure: 0.0,
         })
     }
 

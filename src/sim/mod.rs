@@ -92,14 +92,14 @@ pub struct JointColumn {
 }
 
 /// One joint sample: aperture [m], state, temperature [°C] (NaN without a
-/// thermal model), normal stress across the joint [Pa] (tension positive;
+/// thermal model), pressure across the joint [Pa] (compression positive;
 /// [`crate::mechanics::JointReading`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointSample {
     pub aperture: f64,
     pub state: JointState,
     pub temperature: f64,
-    pub normal_stress: f64,
+    pub pressure: f64,
 }
 
 /// Aperture history at the grouting-zone points and zone minima, one row
@@ -599,7 +599,7 @@ impl<'a> Simulation<'a> {
                     m.point_aperture(self.mesh, zp).map(|r| JointSample {
                         aperture: r.aperture,
                         state: r.state,
-                        normal_stress: r.normal_stress,
+                        pressure: r.pressure,
                         temperature: self
                             .thermal
                             .as_ref()
@@ -613,7 +613,7 @@ impl<'a> Simulation<'a> {
                     .map(|z| JointSample {
                         aperture: z.reading.aperture,
                         state: z.reading.state,
-                        normal_stress: z.reading.normal_stress,
+                        pressure: z.reading.pressure,
                         temperature: z
                             .nodes
                             .iter()

@@ -100,7 +100,7 @@ impl Simulation<'_> {
                     let c = st.label().code();
                     for node in [pt.a as usize, pt.b as usize] {
                         aperture[node] = 1e3 * st.aperture();
-                        pressure[node] = 1e-6 * st.force[2] / pt.area;
+                        pressure[node] = 1e-6 * m.joint_pressure(p);
                         code[node] = c;
                     }
                 }

@@ -102,7 +102,7 @@ fn run_writes_temperatures_apertures_and_snapshots() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("joint,zone,point,date,day,aperture_mm,state,temperature_c,normal_stress_mpa")
+        Some("joint,zone,point,date,day,aperture_mm,state,temperature_c,pressure_mpa")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert!(rows.len() > 1_000, "{} rows", rows.len());
