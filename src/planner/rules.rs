@@ -12,7 +12,7 @@ use std::collections::HashMap;
 
 use crate::scene::PlannerSettings;
 use crate::schedule::{DamLayout, Schedules, ZoneExtent};
-use crate::sim::History;
+use crate::sim::{History, JointSample};
 use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 
 use super::readiness::{Apertures, Rule, RuleCheck, Verdict, ZoneReadiness};
@@ -40,6 +40,17 @@ struct ZoneColumns {
     downstream: Option<usize>,
     min: Option<usize>,
     temps: Option<usize>,
+}
+
+impl ZoneColumns {
+    fn at(&self, point: ZonePoint) -> Option<usize> {
+        match point {
+            ZonePoint::Upstream => self.upstream,
+            ZonePoint::Center => self.center,
+            ZonePoint::Downstream => self.downstream,
+            ZonePoint::Min => self.min,
+        }
+    }
 }
 
 /// Fast lookups into a [`History`].
@@ -73,17 +84,19 @@ impl<'h> HistoryIndex<'h> {
 
     /// Apertures of a zone on a recorded day [mm].
     pub fn apertures(&self, zone: ZoneId, day: Day) -> Apertures {
-        let (Some(c), Some(r)) = (self.zones.get(&zone), self.joint_row(day)) else {
-            return Apertures::default();
-        };
-        let row = &self.history.joint_records.rows[r].1;
-        let mm = |i: Option<usize>| i.and_then(|i| row[i]).map(|s| s.aperture * 1e3);
+        let mm = |p| self.sample(zone, day, p).map(|s| s.aperture * 1e3);
         Apertures {
-            upstream: mm(c.upstream),
-            center: mm(c.center),
-            downstream: mm(c.downstream),
-            min: mm(c.min),
+            upstream: mm(ZonePoint::Upstream),
+            center: mm(ZonePoint::Center),
+            downstream: mm(ZonePoint::Downstream),
+            min: mm(ZonePoint::Min),
         }
+    }
+
+    /// The joint at one point of a zone on a recorded day.
+    pub fn sample(&self, zone: ZoneId, day: Day, point: ZonePoint) -> Option<JointSample> {
+        let i = self.zones.get(&zone)?.at(point)?;
+        self.history.joint_records.rows[self.joint_row(day)?].1[i]
     }
 
     /// The first recorded day after `after` on which a point of the zone is
@@ -202,12 +215,13 @@ impl<'a> Rules<'a> {
         let closure = s.closure_temp_at(0.5 * (z_bottom + z_top));
         let apertures = h.apertures(id, day);
         let a = apertures.at(s.aperture_point);
+        let deciding = h.sample(id, day, s.aperture_point);
         let [ta, tb] = h.block_temps(id, day);
         let age = self.youngest_age(ext.as_ref(), day);
         let cover = self.cover_check(ext.as_ref(), z_top, day);
         let cover_m = cover.value;
         let checks = vec![
-            self.aperture_check(a),
+            self.aperture_check(a, deciding),
             self.temperature_check(h, ext.as_ref(), [ta, tb], closure),
             self.age_check(age),
             cover,
@@ -239,10 +253,16 @@ impl<'a> Rules<'a> {
         }
     }
 
-    /// The deciding point's aperture against the least that takes grout.
-    fn aperture_check(&self, a: Option<f64>) -> RuleCheck {
+    /// The deciding point's aperture against the least that takes grout;
+    /// where the joint is shut there, how hard it is pressed (the pressure
+    /// a further cooling must first relieve).
+    fn aperture_check(&self, a: Option<f64>, deciding: Option<JointSample>) -> RuleCheck {
         let s = self.settings;
         let point = s.aperture_point.as_str();
+        let shut = deciding
+            .filter(|d| matches!(d.state, JointState::Stick | JointState::Slip))
+            .map(|d| d.pressure)
+            .filter(|&p| p > 0.0);
         match a {
             Some(v) => RuleCheck {
                 rule: Rule::Aperture,
@@ -250,8 +270,11 @@ impl<'a> Rules<'a> {
                 limit: s.min_aperture_mm,
                 passed: v >= s.min_aperture_mm,
                 reason: (v < s.min_aperture_mm).then(|| {
+                    let pressed = shut.map_or(String::new(), |p| {
+                        format!(" (shut, pressed at {:.2} MPa)", 1e-6 * p)
+                    });
                     format!(
-                        "aperture {v:.2} mm at the {point} point is below {:.2} mm",
+                        "aperture {v:.2} mm at the {point} point is below {:.2} mm{pressed}",
                         s.min_aperture_mm
                     )
                 }),
@@ -429,5 +452,62 @@ impl<'a> Rules<'a> {
             }
         }
         least
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rules<'a>(settings: &'a PlannerSettings, layout: &'a DamLayout) -> Rules<'a> {
+        Rules {
+            settings,
+            layout,
+            epoch: Epoch(chrono::NaiveDate::from_ymd_opt(2024, 1, 1).unwrap()),
+            lift_height: 3.0,
+            blocks: HashMap::new(),
+            zone_z: HashMap::new(),
+            pour_day: HashMap::new(),
+        }
+    }
+
+    fn sample(state: JointState, pressure: f64) -> Option<JointSample> {
+        Some(JointSample {
+            aperture: 0.0,
+            state,
+            temperature: 12.0,
+            pressure,
+        })
+    }
+
+    /// A zone too tight to grout says whether its deciding point is shut,
+    /// and how hard it is pressed there; an open point or a grout layer
+    /// is not "shut".
+    #[test]
+    fn a_shut_joint_is_reported_with_its_contact_pressure() {
+        let (settings, layout) = (PlannerSettings::default(), DamLayout::default());
+        let r = rules(&settings, &layout);
+        let reason = |s| r.aperture_check(Some(0.0), s).reason.unwrap();
+        assert_eq!(
+            reason(sample(JointState::Stick, 4.2e5)),
+            "aperture 0.00 mm at the min point is below 0.50 mm (shut, pressed at 0.42 MPa)"
+        );
+        assert!(reason(sample(JointState::Slip, 1.5e6)).ends_with("(shut, pressed at 1.50 MPa)"));
+        for s in [
+            sample(JointState::Open, 0.0),
+            sample(JointState::Grouted, 4.2e5),
+            sample(JointState::Stick, 0.0),
+            None,
+        ] {
+            assert_eq!(
+                reason(s),
+                "aperture 0.00 mm at the min point is below 0.50 mm",
+                "{s:?}"
+            );
+        }
+        assert!(
+            r.aperture_check(Some(0.6), sample(JointState::Stick, 4.2e5))
+                .passed
+        );
     }
 }
