@@ -40,9 +40,6 @@ pub fn write(
             let Some(s) = samples[i] else { continue };
             let date = epoch.date(day);
             let day = day.0;
-            // rounded to the column's 4 decimals without a "-0.0000"
-            let mpa = 1e-6 * s.pressure;
-            let mpa = if mpa.abs() < 5e-5 { 0.0 } else { mpa };
             let temp = if s.temperature.is_nan() {
                 String::new()
             } else {
@@ -50,15 +47,34 @@ pub fn write(
             };
             writeln!(
                 w,
-                "{joint},{zone},{},{date},{day},{:.4},{},{temp},{:.4}",
+                "{joint},{zone},{},{date},{day},{},{},{temp},{}",
                 col.point.as_str(),
-                1e3 * s.aperture,
+                four_decimals(1e3 * s.aperture),
                 s.state,
-                mpa
+                four_decimals(1e-6 * s.pressure)
             )?;
             rows += 1;
         }
     }
     w.flush()?;
     Ok(rows)
+}
+
+/// `v` to 4 decimals, a value that rounds to zero printed "0.0000" (not
+/// "-0.0000": a grout layer compressed by round-off, a point at rest).
+fn four_decimals(v: f64) -> String {
+    format!("{:.4}", if v.abs() < 5e-5 { 0.0 } else { v })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::four_decimals;
+
+    #[test]
+    fn a_value_rounding_to_zero_has_no_sign() {
+        assert_eq!(four_decimals(-0.0), "0.0000");
+        assert_eq!(four_decimals(-4e-5), "0.0000");
+        assert_eq!(four_decimals(-6e-5), "-0.0001");
+        assert_eq!(four_decimals(1.73774), "1.7377");
+    }
 }
