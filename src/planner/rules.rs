@@ -35,21 +35,14 @@ pub struct Rules<'a> {
 /// Column indices of one zone in a [`History`].
 #[derive(Debug, Clone, Copy, Default)]
 struct ZoneColumns {
-    upstream: Option<usize>,
-    center: Option<usize>,
-    downstream: Option<usize>,
-    min: Option<usize>,
+    /// the joint-record column of each point, in [`ZonePoint::ALL`] order
+    points: [Option<usize>; 4],
     temps: Option<usize>,
 }
 
 impl ZoneColumns {
     fn at(&self, point: ZonePoint) -> Option<usize> {
-        match point {
-            ZonePoint::Upstream => self.upstream,
-            ZonePoint::Center => self.center,
-            ZonePoint::Downstream => self.downstream,
-            ZonePoint::Min => self.min,
-        }
+        self.points[point as usize]
     }
 }
 
@@ -63,13 +56,7 @@ impl<'h> HistoryIndex<'h> {
     pub fn new(history: &'h History) -> HistoryIndex<'h> {
         let mut zones: HashMap<ZoneId, ZoneColumns> = HashMap::new();
         for (i, col) in history.joint_records.columns.iter().enumerate() {
-            let c = zones.entry(col.zone).or_default();
-            *match col.point {
-                ZonePoint::Upstream => &mut c.upstream,
-                ZonePoint::Center => &mut c.center,
-                ZonePoint::Downstream => &mut c.downstream,
-                ZonePoint::Min => &mut c.min,
-            } = Some(i);
+            zones.entry(col.zone).or_default().points[col.point as usize] = Some(i);
         }
         for (i, z) in history.zone_temps.zones.iter().enumerate() {
             zones.entry(z.zone_id()).or_default().temps = Some(i);
@@ -103,10 +90,7 @@ impl<'h> HistoryIndex<'h> {
     /// labelled `reopened`.
     pub fn reopened_after(&self, zone: ZoneId, after: Day) -> Option<Day> {
         let c = self.zones.get(&zone)?;
-        let cols: Vec<usize> = [c.upstream, c.center, c.downstream, c.min]
-            .into_iter()
-            .flatten()
-            .collect();
+        let cols: Vec<usize> = c.points.into_iter().flatten().collect();
         self.history
             .joint_records
             .rows
@@ -215,13 +199,13 @@ impl<'a> Rules<'a> {
         let closure = s.closure_temp_at(0.5 * (z_bottom + z_top));
         let apertures = h.apertures(id, day);
         let a = apertures.at(s.aperture_point);
-        let deciding = h.sample(id, day, s.aperture_point);
+
         let [ta, tb] = h.block_temps(id, day);
         let age = self.youngest_age(ext.as_ref(), day);
         let cover = self.cover_check(ext.as_ref(), z_top, day);
         let cover_m = cover.value;
         let checks = vec![
-            self.aperture_check(a, deciding),
+            self.aperture_check(h.sample(id, day, s.aperture_point)),
             self.temperature_check(h, ext.as_ref(), [ta, tb], closure),
             self.age_check(age),
             cover,
@@ -256,14 +240,14 @@ impl<'a> Rules<'a> {
     /// The deciding point's aperture against the least that takes grout;
     /// where the joint is shut there, how hard it is pressed (the pressure
     /// a further cooling must first relieve).
-    fn aperture_check(&self, a: Option<f64>, deciding: Option<JointSample>) -> RuleCheck {
+    fn aperture_check(&self, deciding: Option<JointSample>) -> RuleCheck {
         let s = self.settings;
         let point = s.aperture_point.as_str();
         let shut = deciding
             .filter(|d| matches!(d.state, JointState::Stick | JointState::Slip))
             .map(|d| d.pressure)
             .filter(|&p| p > 0.0);
-        match a {
+        match deciding.map(|d| d.aperture * 1e3) {
             Some(v) => RuleCheck {
                 rule: Rule::Aperture,
                 value: Some(v),
@@ -472,8 +456,12 @@ mod tests {
     }
 
     fn sample(state: JointState, pressure: f64) -> Option<JointSample> {
+        opened(0.0, state, pressure)
+    }
+
+    fn opened(aperture_mm: f64, state: JointState, pressure: f64) -> Option<JointSample> {
         Some(JointSample {
-            aperture: 0.0,
+            aperture: aperture_mm * 1e-3,
             state,
             temperature: 12.0,
             pressure,
@@ -487,7 +475,7 @@ mod tests {
     fn a_shut_joint_is_reported_with_its_contact_pressure() {
         let (settings, layout) = (PlannerSettings::default(), DamLayout::default());
         let r = rules(&settings, &layout);
-        let reason = |s| r.aperture_check(Some(0.0), s).reason.unwrap();
+        let reason = |s| r.aperture_check(s).reason.unwrap();
         assert_eq!(
             reason(sample(JointState::Stick, 4.2e5)),
             "aperture 0.00 mm at the min point is below 0.50 mm (shut, pressed at 0.42 MPa)"
@@ -497,7 +485,6 @@ mod tests {
             sample(JointState::Open, 0.0),
             sample(JointState::Grouted, 4.2e5),
             sample(JointState::Stick, 0.0),
-            None,
         ] {
             assert_eq!(
                 reason(s),
@@ -506,7 +493,7 @@ mod tests {
             );
         }
         assert!(
-            r.aperture_check(Some(0.6), sample(JointState::Stick, 4.2e5))
+            r.aperture_check(opened(0.6, JointState::Stick, 4.2e5))
                 .passed
         );
     }
