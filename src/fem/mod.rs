@@ -33,6 +33,7 @@ pub mod half_solves;
 pub mod hex8;
 pub mod hex8_modes;
 pub mod ordering;
+pub mod permuted_lower;
 pub mod quad4;
 pub mod quadrature;
 pub mod solver;

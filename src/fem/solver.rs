@@ -17,7 +17,7 @@ use std::time::Instant;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltError as DenseLltError;
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{self, SupernodalLltRef};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
@@ -30,6 +30,7 @@ use super::half_solves::{
     forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
 };
 use super::ordering::{metis_nested_dissection, Ordering};
+use super::permuted_lower::PermutedLower;
 use super::sparse::{Pattern, SparseSym};
 
 impl SolveError {
@@ -110,6 +111,11 @@ pub struct CholeskySolver {
     symbolic: Arc<SymbolicCholesky<u32>>,
     /// the blocks and elimination tree of `symbolic`, for reach solves
     tree: Arc<BlockTree>,
+    /// the matrix's structure in the elimination order, for a supernodal
+    /// analysis (made once, shared by forks)
+    permuted: Option<Arc<PermutedLower>>,
+    /// the matrix's values in that structure, placed per factorisation
+    placed: Vec<f64>,
     l_values: Vec<f64>,
     scratch: MemBuffer,
     factorized: bool,
@@ -163,10 +169,8 @@ impl CholeskySolver {
             Ordering::Custom(fwd) => symbolic_custom(&pattern, fwd)?,
         }
         .map_err(|e| SolveError::Faer(format!("symbolic Cholesky: {e:?}")))?;
-        let scratch = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        )
-        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        let permuted = permuted_lower(&pattern, &symbolic).map(Arc::new);
+        let scratch = factor_scratch(&symbolic, permuted.is_some(), par)?;
         let stats = SolverStats {
             n_symbolic: 1,
             symbolic_seconds: t.elapsed().as_secs_f64(),
@@ -176,6 +180,8 @@ impl CholeskySolver {
             pattern,
             tree: Arc::new(BlockTree::new(&symbolic)),
             symbolic: Arc::new(symbolic),
+            permuted,
+            placed: Vec::new(),
             l_values: Vec::new(),
             scratch,
             factorized: false,
@@ -188,15 +194,13 @@ impl CholeskySolver {
     /// its own numeric factor: lets a caller keep factors of several matrices
     /// of one pattern, e.g. one per time-step length.
     pub fn fork(&self) -> Result<Self, SolveError> {
-        let scratch = MemBuffer::try_new(
-            self.symbolic
-                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
-        )
-        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        let scratch = factor_scratch(&self.symbolic, self.permuted.is_some(), self.par)?;
         Ok(CholeskySolver {
             pattern: self.pattern.clone(),
             symbolic: self.symbolic.clone(),
             tree: self.tree.clone(),
+            permuted: self.permuted.clone(),
+            placed: Vec::new(),
             l_values: Vec::new(),
             scratch,
             factorized: false,
@@ -268,11 +272,7 @@ impl CholeskySolver {
     }
 
     pub fn set_parallelism(&mut self, par: Par) -> Result<(), SolveError> {
-        self.scratch = MemBuffer::try_new(
-            self.symbolic
-                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        )
-        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+        self.scratch = factor_scratch(&self.symbolic, self.permuted.is_some(), par)?;
         self.par = par;
         Ok(())
     }
@@ -311,18 +311,33 @@ impl CholeskySolver {
                 .map_err(|_| SolveError::Faer(format!("out of memory for {len} factor entries")))?;
             self.l_values.resize(len, 0.0);
         }
-        let result = self
-            .symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.l_values,
-                matrix.as_faer(),
-                Side::Upper,
-                Default::default(),
-                self.par,
-                MemStack::new(&mut self.scratch),
-                Default::default(),
-            )
-            .map(|_| ());
+        let result = match (self.symbolic.raw(), &self.permuted) {
+            (SymbolicCholeskyRaw::Supernodal(s), Some(p)) => {
+                p.place(matrix.values(), &mut self.placed);
+                supernodal::factorize_supernodal_numeric_llt(
+                    &mut self.l_values,
+                    p.matrix(&self.placed),
+                    Default::default(),
+                    s,
+                    self.par,
+                    MemStack::new(&mut self.scratch),
+                    Default::default(),
+                )
+                .map(|_| ())
+            }
+            _ => self
+                .symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut self.l_values,
+                    matrix.as_faer(),
+                    Side::Upper,
+                    Default::default(),
+                    self.par,
+                    MemStack::new(&mut self.scratch),
+                    Default::default(),
+                )
+                .map(|_| ()),
+        };
         let seconds = t.elapsed().as_secs_f64();
         self.record(|s| {
             s.n_numeric += 1;
@@ -591,6 +606,39 @@ impl CholeskySolver {
     pub fn reach_cost(&self, dof: usize) -> (f64, u64) {
         self.tree.path_of_column(self.permuted_row(dof))
     }
+}
+
+/// The permuted structure a supernodal analysis factorises from (None for
+/// a simplicial one, which faer permutes itself).
+fn permuted_lower(pattern: &Pattern, symbolic: &SymbolicCholesky<u32>) -> Option<PermutedLower> {
+    if !matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+        return None;
+    }
+    let inv: Vec<u32> = match symbolic.perm() {
+        Some(p) => p.arrays().1.to_vec(),
+        None => (0..pattern.n_dofs() as u32).collect(),
+    };
+    Some(PermutedLower::new(pattern, &inv))
+}
+
+/// Workspace of a numeric factorisation: faer's whole one, or only its
+/// supernodal part when the matrix comes permuted ([`PermutedLower`]).
+fn factor_scratch(
+    symbolic: &SymbolicCholesky<u32>,
+    permuted: bool,
+    par: Par,
+) -> Result<MemBuffer, SolveError> {
+    let req = match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(s) if permuted => {
+            supernodal::factorize_supernodal_numeric_llt_scratch::<u32, f64>(
+                s,
+                par,
+                Default::default(),
+            )
+        }
+        _ => symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+    };
+    MemBuffer::try_new(req).map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))
 }
 
 /// faer's symbolic Cholesky of `pattern` in the elimination order `fwd`

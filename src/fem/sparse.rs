@@ -565,9 +565,8 @@ impl SparseSym {
             let xj = x[j];
             let mut acc = 0.0;
             // the last entry of the column is the diagonal
-            for k in s..e - 1 {
-                let i = p.row_idx[k] as usize;
-                let v = self.values[k];
+            for (&i, &v) in p.row_idx[s..e - 1].iter().zip(&self.values[s..e - 1]) {
+                let i = i as usize;
                 y[i] += v * xj;
                 acc += v * x[i];
             }

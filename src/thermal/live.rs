@@ -191,7 +191,7 @@ impl LiveSystem {
         let cap_consistent = if consistent {
             let mut m = SparseSym::new(pattern.clone());
             for (slot, &e) in live_elems.iter().enumerate() {
-                m.add_element(slot, &data.cap_consistent(e as usize));
+                m.add_element(slot, &data.cap_consistent[e as usize]);
             }
             Some(m)
         } else {
