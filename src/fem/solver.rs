@@ -685,3 +685,79 @@ pub fn relative_residual(matrix: &SparseSym, x: &[f64], b: &[f64]) -> f64 {
         r
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scalar hex grid of `m`³ elements: an 8 × 8 element matrix with 8
+    /// on its diagonal and −1 off it, plus a unit diagonal (positive definite).
+    fn grid(m: usize) -> SparseSym {
+        let p = m + 1;
+        let node = |i: usize, j: usize, k: usize| (i + p * (j + p * k)) as u32;
+        let mut conn = Vec::new();
+        for k in 0..m {
+            for j in 0..m {
+                for i in 0..m {
+                    conn.push([
+                        node(i, j, k),
+                        node(i + 1, j, k),
+                        node(i + 1, j + 1, k),
+                        node(i, j + 1, k),
+                        node(i, j, k + 1),
+                        node(i + 1, j, k + 1),
+                        node(i + 1, j + 1, k + 1),
+                        node(i, j + 1, k + 1),
+                    ]);
+                }
+            }
+        }
+        let mut a = SparseSym::new(Arc::new(Pattern::new(p * p * p, &conn)));
+        let ke = nalgebra::DMatrix::<f64>::from_fn(8, 8, |r, c| if r == c { 8.0 } else { -1.0 });
+        for e in 0..conn.len() {
+            a.add_element(e, &ke);
+        }
+        for d in 0..p * p * p {
+            a.add_diag(d, 1.0 + (d % 5) as f64 * 0.1);
+        }
+        a
+    }
+
+    /// The supernodal factor made from the matrix permuted once per
+    /// analysis ([`PermutedLower`]) is faer's own, made with its
+    /// permutation at the call, to the bit.
+    #[test]
+    fn the_factor_from_the_map_is_faers_to_the_bit() {
+        let a = grid(16);
+        for ordering in [Ordering::Metis, Ordering::Amd] {
+            let mut s = CholeskySolver::with_options(a.pattern().clone(), &ordering, Par::Seq)
+                .expect("analysis");
+            assert!(s.is_supernodal(), "{ordering:?}: a supernodal analysis");
+            s.factorize(&a).expect("positive definite");
+            let mut faers = vec![0.0; s.symbolic.len_val()];
+            let mut mem = MemBuffer::new(
+                s.symbolic
+                    .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            );
+            s.symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut faers,
+                    a.as_faer(),
+                    Side::Upper,
+                    Default::default(),
+                    Par::Seq,
+                    MemStack::new(&mut mem),
+                    Default::default(),
+                )
+                .expect("positive definite");
+            assert_eq!(faers.len(), s.l_values.len());
+            assert!(
+                faers
+                    .iter()
+                    .zip(&s.l_values)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{ordering:?}: the factors differ"
+            );
+        }
+    }
+}

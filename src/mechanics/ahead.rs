@@ -47,6 +47,17 @@
 //! 700`, alternated, 27 Nov 2026) 88.0 and 86.5 s against 93.5 and 99.7 s
 //! when it was joined at the end of its step (waits 15.7 against 24–25 s).
 //!
+//! The next step's order ([`Order`]: its K̃, the matrix of its first pass
+//! and the guess) is made before the step waits for its own factor, and
+//! the job is started before the step's loads are assembled, so the other
+//! core waits for nothing but the swap of the solvers. With the order made
+//! after the wait, the other core idled 21.8 s of the demo's 78.6 s
+//! between a factor and the next; the run now takes 74.1 against 80.2 s,
+//! the steps waiting 9.3 against 16.0 s (`study perf --quick`, alone on
+//! the 2 cores, 28 Nov 2026; the run folder the same to the byte). A step
+//! that pours lifts orders after its rebuild (the next live system is the
+//! one being factorised).
+//!
 //! The factor is made only when the driver can name the next step
 //! ([`FactorAhead::set_next`]) and no zone is grouted at its start (a
 //! zone's springs would exceed the break-even). When lifts are poured at
@@ -190,49 +201,17 @@ impl Made {
     }
 }
 
-/// The next step's interval and K̃, waiting for this step's first pass.
+/// The next step's factorisation but the solver it is made in: its
+/// interval, K̃, the matrix of its first pass and the states that matrix
+/// was guessed from. Made before the step waits for its own factor, so
+/// the other core starts on it as soon as it is free ([`FactorAhead::job`]).
 pub struct Order {
     interval: (f64, f64),
     assembled: Assembled,
-    /// `None`: this live system (and a solver left from an earlier step,
-    /// if any); otherwise the next step's own
+    /// `None`: this live system; otherwise the next step's own
     births: Option<Box<Births>>,
-    spare: Option<CholeskySolver>,
-}
-
-impl Order {
-    /// The factorisation of the next step's first pass, guessed from this
-    /// step's start `states` on `live`.
-    pub fn job(self, live: &LiveSystem, states: &[JointPointState]) -> Result<Job, SolveError> {
-        let (prepared, target, states) = match self.births {
-            None => {
-                let prepared = Prepared::first_pass(&self.assembled.stiffness, live, states);
-                let solver = match self.spare {
-                    Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
-                    _ => live.solver.fork()?,
-                };
-                (prepared, Target::Solver(solver), states.to_vec())
-            }
-            Some(births) => {
-                let mut states = states.to_vec();
-                for &(p, st) in &births.paired {
-                    states[p] = st;
-                }
-                let prepared =
-                    Prepared::first_pass(&self.assembled.stiffness, &births.sys, &states);
-                (prepared, Target::Born(births), states)
-            }
-        };
-        Ok(Job {
-            made: Made {
-                interval: self.interval,
-                target,
-                prepared,
-                states,
-                assembled: self.assembled,
-            },
-        })
-    }
+    prepared: Prepared,
+    states: Vec<JointPointState>,
 }
 
 /// What the factor made ahead for the next step was guessed from: its
@@ -420,24 +399,55 @@ impl FactorAhead {
     }
 
     /// The order for the next step's factor over `interval`, whose K̃ is
-    /// `assembled`, on this live system or, when its start pours lifts, on
-    /// `births`: the step fills it with its start states.
+    /// `assembled`, on `live` or, when its start pours lifts, on `births`,
+    /// guessed from this step's start `states`.
     pub fn order(
-        &mut self,
+        &self,
         interval: (f64, f64),
         assembled: Assembled,
         births: Option<Births>,
+        live: &LiveSystem,
+        states: &[JointPointState],
     ) -> Order {
+        let mut states = states.to_vec();
+        let prepared = match &births {
+            None => Prepared::first_pass(&assembled.stiffness, live, &states),
+            Some(births) => {
+                for &(p, st) in &births.paired {
+                    states[p] = st;
+                }
+                Prepared::first_pass(&assembled.stiffness, &births.sys, &states)
+            }
+        };
         Order {
             interval,
             assembled,
-            spare: if births.is_none() {
-                self.spare.take()
-            } else {
-                None
-            },
             births: births.map(Box::new),
+            prepared,
+            states,
         }
+    }
+
+    /// The factorisation of `order`: into the next step's own live system,
+    /// or into the spare solver on `live` (a fork of its solver when no
+    /// spare fits).
+    pub fn job(&mut self, order: Order, live: &LiveSystem) -> Result<Job, SolveError> {
+        let target = match order.births {
+            Some(births) => Target::Born(births),
+            None => Target::Solver(match self.spare.take() {
+                Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
+                _ => live.solver.fork()?,
+            }),
+        };
+        Ok(Job {
+            made: Made {
+                interval: order.interval,
+                target,
+                prepared: order.prepared,
+                states: order.states,
+                assembled: order.assembled,
+            },
+        })
     }
 
     /// A factorisation ordered but never started (no solver could be
