@@ -76,11 +76,6 @@ impl PermutedLower {
     pub fn matrix<'a>(&'a self, placed: &'a [f64]) -> SparseColMatRef<'a, u32, f64> {
         SparseColMatRef::new(self.structure.as_ref(), placed)
     }
-
-    /// Bytes held: the structure and the map.
-    pub fn bytes(&self) -> usize {
-        4 * (self.structure.col_ptr().len() + 2 * self.target.len())
-    }
 }
 
 #[cfg(test)]

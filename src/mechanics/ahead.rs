@@ -214,6 +214,37 @@ pub struct Order {
     states: Vec<JointPointState>,
 }
 
+impl Order {
+    /// The order for the next step's factor over `interval`, whose K̃ is
+    /// `assembled`, on `live` or, when its start pours lifts, on `births`,
+    /// guessed from this step's start `states`.
+    pub fn new(
+        interval: (f64, f64),
+        assembled: Assembled,
+        births: Option<Births>,
+        live: &LiveSystem,
+        states: &[JointPointState],
+    ) -> Order {
+        let mut states = states.to_vec();
+        let prepared = match &births {
+            None => Prepared::first_pass(&assembled.stiffness, live, &states),
+            Some(births) => {
+                for &(p, st) in &births.paired {
+                    states[p] = st;
+                }
+                Prepared::first_pass(&assembled.stiffness, &births.sys, &states)
+            }
+        };
+        Order {
+            interval,
+            assembled,
+            births: births.map(Box::new),
+            prepared,
+            states,
+        }
+    }
+}
+
 /// What the factor made ahead for the next step was guessed from: its
 /// interval and the joint states (this step's start states, the new pairs
 /// of a pour as a rebuild makes them). A checkpoint carries it, so a run
@@ -396,36 +427,6 @@ impl FactorAhead {
         let next = self.next.take()?;
         (live.n < PARALLEL_FROM_DOFS && 8 * live.solver.factor_nnz() <= AHEAD_MAX_BYTES)
             .then_some(next)
-    }
-
-    /// The order for the next step's factor over `interval`, whose K̃ is
-    /// `assembled`, on `live` or, when its start pours lifts, on `births`,
-    /// guessed from this step's start `states`.
-    pub fn order(
-        &self,
-        interval: (f64, f64),
-        assembled: Assembled,
-        births: Option<Births>,
-        live: &LiveSystem,
-        states: &[JointPointState],
-    ) -> Order {
-        let mut states = states.to_vec();
-        let prepared = match &births {
-            None => Prepared::first_pass(&assembled.stiffness, live, &states),
-            Some(births) => {
-                for &(p, st) in &births.paired {
-                    states[p] = st;
-                }
-                Prepared::first_pass(&assembled.stiffness, &births.sys, &states)
-            }
-        };
-        Order {
-            interval,
-            assembled,
-            births: births.map(Box::new),
-            prepared,
-            states,
-        }
     }
 
     /// The factorisation of `order`: into the next step's own live system,

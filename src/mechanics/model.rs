@@ -952,10 +952,8 @@ impl MechanicsModel {
                 _ => None,
             }
         };
-        let order = made.map(|(k, births)| {
-            self.ahead
-                .order(next.interval, k, births, &self.sys, &self.state.joints)
-        });
+        let order = made
+            .map(|(k, births)| Order::new(next.interval, k, births, &self.sys, &self.state.joints));
         let symbolic = self.stats.seconds_symbolic - symbolic_before;
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64() - symbolic;
         order
