@@ -556,45 +556,34 @@ impl SparseSym {
     /// # Panics
     /// If `x` or `y` is not of length n.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        self.mul_vec_of(x, y, |v| v);
+    }
+
+    /// y = |A| |x| (entrywise absolute values): the size of the forces
+    /// A x sums, against which its round-off is measured.
+    pub fn abs_mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        self.mul_vec_of(x, y, f64::abs);
+    }
+
+    /// y = f(A) f(x), f applied entrywise, in one sweep of the upper
+    /// triangle (column j's entries add to y_i and to y_j).
+    #[inline]
+    fn mul_vec_of(&self, x: &[f64], y: &mut [f64], f: impl Fn(f64) -> f64) {
         let p = &*self.pattern;
         assert!(x.len() == p.n && y.len() == p.n, "mul_vec: length mismatch");
         y.fill(0.0);
         for j in 0..p.n {
             let s = p.col_ptr[j] as usize;
             let e = p.col_ptr[j + 1] as usize;
-            let xj = x[j];
+            let xj = f(x[j]);
             let mut acc = 0.0;
             // the last entry of the column is the diagonal
             for (&i, &v) in p.row_idx[s..e - 1].iter().zip(&self.values[s..e - 1]) {
-                let i = i as usize;
+                let (i, v) = (i as usize, f(v));
                 y[i] += v * xj;
-                acc += v * x[i];
+                acc += v * f(x[i]);
             }
-            y[j] += acc + self.values[e - 1] * xj;
-        }
-    }
-
-    /// y = |A| |x| (entrywise absolute values): the size of the forces
-    /// A x sums, against which its round-off is measured.
-    pub fn abs_mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        let p = &*self.pattern;
-        assert!(
-            x.len() == p.n && y.len() == p.n,
-            "abs_mul_vec: length mismatch"
-        );
-        y.fill(0.0);
-        for j in 0..p.n {
-            let s = p.col_ptr[j] as usize;
-            let e = p.col_ptr[j + 1] as usize;
-            let xj = x[j].abs();
-            let mut acc = 0.0;
-            for k in s..e - 1 {
-                let i = p.row_idx[k] as usize;
-                let v = self.values[k].abs();
-                y[i] += v * xj;
-                acc += v * x[i].abs();
-            }
-            y[j] += acc + self.values[e - 1].abs() * xj;
+            y[j] += acc + f(self.values[e - 1]) * xj;
         }
     }
 
