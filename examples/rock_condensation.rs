@@ -10,7 +10,13 @@
 //! 3. the rock and the concrete below a quarter, half, three quarters and
 //!    all of the height: a METIS call of its own against the complete
 //!    mesh's order restricted to its dofs (relative order kept, as
-//!    `mechanics::live::ConstructionOrdering` does).
+//!    `mechanics::live::ConstructionOrdering` does), and (4.) the share
+//!    of each below;
+//! 4. on the complete matrix's METIS order, the supernodes whose whole
+//!    subtree holds only rock unknowns: their columns of L never change
+//!    while the rock stays linear, so their share of the flops and entries
+//!    is what a factorisation and a solve could keep from one day to the
+//!    next if that rock were condensed once.
 //!
 //!     cargo run --release --example rock_condensation [SCENE]
 use groutready::fem::{metis_nested_dissection, CholeskySolver, Ordering, Pattern};
@@ -26,7 +32,8 @@ fn main() -> anyhow::Result<()> {
     let mesh = &inputs.mesh;
     rock_layers(mesh);
     condensation(mesh)?;
-    ordering_reuse(mesh)
+    ordering_reuse(mesh)?;
+    frozen_subtrees(mesh)
 }
 
 fn node_dofs(v: u32) -> [u32; 3] {
@@ -223,7 +230,126 @@ fn ordering_reuse(mesh: &Mesh) -> anyhow::Result<()> {
                 (m != u32::MAX).then(|| 3 * m + d % 3)
             })
             .collect();
-        report("  the complete order", p, Ordering::Custom(restricted))?;
+        report(
+            "  the complete order",
+            p.clone(),
+            Ordering::Custom(restricted.clone()),
+        )?;
+        let conc = in_concrete(mesh, &live);
+        let mut node_of = vec![0u32; n as usize];
+        for (v, &m) in map.iter().enumerate() {
+            if m != u32::MAX {
+                node_of[m as usize] = v as u32;
+            }
+        }
+        frozen_share("  the complete order", &p, &restricted, &|d| {
+            conc[node_of[d / 3] as usize]
+        })?;
     }
+    Ok(())
+}
+
+/// Part 4 of the module doc, on the complete matrix.
+fn frozen_subtrees(mesh: &Mesh) -> anyhow::Result<()> {
+    let nn = mesh.nodes.len();
+    let identity: Vec<u32> = (0..nn as u32).collect();
+    let p = pattern(mesh, &|_| true, &identity, nn as u32, &[]);
+    let fwd = metis_nested_dissection(&p)?;
+    let conc = in_concrete(mesh, &|_| true);
+    frozen_share("complete", &p, &fwd, &|d| conc[d / 3])
+}
+
+/// Nodes of the live concrete elements.
+fn in_concrete(mesh: &Mesh, live: &dyn Fn(usize) -> bool) -> Vec<bool> {
+    let mut in_conc = vec![false; mesh.nodes.len()];
+    for (e, conn) in mesh.elements.iter().enumerate() {
+        if mesh.parts[e] != Part::Rock && live(e) {
+            conn.iter().for_each(|&v| in_conc[v as usize] = true);
+        }
+    }
+    in_conc
+}
+
+/// The share of one factorisation's flops and entries in the supernodes
+/// whose subtree holds only rock unknowns (`concrete(dof)` false), on the
+/// order `fwd` of `p`.
+fn frozen_share(
+    name: &str,
+    p: &Pattern,
+    fwd: &[u32],
+    concrete: &dyn Fn(usize) -> bool,
+) -> anyhow::Result<()> {
+    use faer::sparse::linalg::cholesky::{
+        factorize_symbolic_cholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    };
+    let n = p.n_dofs();
+    let mut inv = vec![0u32; n];
+    for (k, &d) in fwd.iter().enumerate() {
+        inv[d as usize] = k as u32;
+    }
+    let sym = factorize_symbolic_cholesky(
+        p.symbolic(),
+        faer::Side::Upper,
+        SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(fwd, &inv, n)),
+        Default::default(),
+    )
+    .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let SymbolicCholeskyRaw::Supernodal(s) = sym.raw() else {
+        anyhow::bail!("not supernodal");
+    };
+    let u = |x: &[u32]| x.iter().map(|&v| v as usize).collect::<Vec<usize>>();
+    let (begin, end) = (u(s.supernode_begin()), u(s.supernode_end()));
+    let (rptr, ridx) = (u(s.col_ptr_for_row_idx()), u(s.row_idx()));
+    let ns = s.n_supernodes();
+    let mut sn_of = vec![0usize; n];
+    for k in 0..ns {
+        sn_of[begin[k]..end[k]].iter_mut().for_each(|x| *x = k);
+    }
+    // children before parents: a supernode is frozen when its columns are
+    // rock-only and no child is live
+    let mut frozen: Vec<bool> = (0..ns)
+        .map(|k| (begin[k]..end[k]).all(|c| !concrete(fwd[c] as usize)))
+        .collect();
+    for k in 0..ns {
+        if !frozen[k] {
+            if let Some(&r) = ridx[rptr[k]..rptr[k + 1]].first() {
+                frozen[sn_of[r]] = false;
+            }
+        }
+    }
+    let (mut fl, mut fl_frozen, mut nnz, mut nnz_frozen, mut cols_frozen, mut c_entries) =
+        (0.0, 0.0, 0.0, 0.0, 0usize, 0.0);
+    for k in 0..ns {
+        let w = (end[k] - begin[k]) as f64;
+        let below = (rptr[k + 1] - rptr[k]) as f64;
+        let f: f64 = (0..w as usize)
+            .map(|i| (w - i as f64 + below).powi(2))
+            .sum();
+        let e = w * (w + 1.0) / 2.0 + w * below;
+        fl += f;
+        nnz += e;
+        if frozen[k] {
+            fl_frozen += f;
+            nnz_frozen += e;
+            cols_frozen += end[k] - begin[k];
+            let root = ridx[rptr[k]..rptr[k + 1]]
+                .first()
+                .is_none_or(|&r| !frozen[sn_of[r]]);
+            if root {
+                c_entries += below * (below + 1.0) / 2.0;
+            }
+        }
+    }
+    println!(
+        "{name:24} frozen rock subtrees: {cols_frozen} of {n} columns, {:.1}M of {:.1}M entries \
+         of L ({:.1} %), {:.2} of {:.2} Gflop ({:.1} %); their update blocks {:.1}M entries",
+        nnz_frozen / 1e6,
+        nnz / 1e6,
+        100.0 * nnz_frozen / nnz,
+        fl_frozen / 1e9,
+        fl / 1e9,
+        100.0 * fl_frozen / fl,
+        c_entries / 1e6
+    );
     Ok(())
 }

@@ -42,10 +42,12 @@ use nalgebra::DMatrix;
 
 use crate::fem::elasticity::Mat24;
 use crate::fem::{
-    metis_nested_dissection, CholeskySolver, MetisError, Ordering, Pattern, SolveError,
+    metis_nested_dissection, CholeskySolver, MetisError, Ordering, Pattern, SolveError, SparseSym,
+    NO_DOF,
 };
 
 use super::joints::JointPoint;
+use super::rock_condensation::CondensedRock;
 use super::rock_ties::{RockTies, Tie};
 
 /// Marks a dof without an unknown.
@@ -85,6 +87,9 @@ pub struct LiveElement {
     pub terms: Option<Box<[Term]>>,
     /// Tᵀ K̂ T of the unit-modulus stiffness when `terms` is not None
     pub k_unit: Option<DMatrix<f64>>,
+    /// every dof condensed ([`super::rock_condensation`]): the element
+    /// adds nothing to the system's matrix
+    pub condensed: bool,
 }
 
 /// One 3 × 3 block of an element's T: the displacement of the element's
@@ -109,7 +114,17 @@ pub struct LivePair {
 
 /// The numbering, pattern and symbolic factorisation of one live set.
 pub struct LiveSystem {
+    /// unknowns of the system solved (the condensed rock's not counted)
     pub n: usize,
+    /// the condensed rock's unknowns, numbered after the system's
+    /// (`n..n + n_condensed`; 0 when nothing is condensed)
+    pub n_condensed: usize,
+    /// the condensed rock, when this system has it condensed
+    pub rock: Option<Arc<CondensedRock>>,
+    /// the rock's part of the system's matrix (its elements, −C of the
+    /// condensed rock), which no step changes: each step's stiffness
+    /// starts from it (set by the model, which knows the rock's modulus)
+    pub rock_matrix: Option<SparseSym>,
     /// reduced dof of each global node dof (NONE for dead nodes and the b side of live pairs)
     pub index_of: Vec<u32>,
     /// pair slot of each node on the b side of a live pair (NONE otherwise)
@@ -160,6 +175,8 @@ pub struct ElementSet<'a> {
     pub live: &'a [bool],
     pub k_unit: &'a [Mat24],
     pub ties: &'a RockTies,
+    /// the rock to condense, when every one of its unknowns is live
+    pub rock: Option<&'a Arc<CondensedRock>>,
 }
 
 impl LiveSystem {
@@ -172,6 +189,7 @@ impl LiveSystem {
             live: &[],
             k_unit: &[],
             ties: &RockTies::none(),
+            rock: None,
         };
         LiveSystem::build(none, points, &no_pair, &[], n_nodes, &OrderingPlan::Amd)
     }
@@ -189,9 +207,13 @@ impl LiveSystem {
         plan: &OrderingPlan,
     ) -> Result<LiveSystem, LiveError> {
         let k_unit = elements.k_unit;
-        let numbered = Numbered::new(elements, points, pair_live, n_nodes)?;
-        let n = numbered.n;
-        let pattern = Arc::new(numbered.pattern());
+        let rock = elements.rock.cloned();
+        let mut numbered = Numbered::new(elements, points, pair_live, n_nodes)?;
+        let rock = rock.filter(|r| numbered.condense(r));
+        let n_all = numbered.n;
+        let n_condensed = rock.as_ref().map_or(0, |r| r.n());
+        let n = n_all - n_condensed;
+        let pattern = Arc::new(numbered.pattern_without(n, rock.as_deref()));
         let par = if n < PARALLEL_FROM_DOFS {
             faer::Par::Seq
         } else {
@@ -201,7 +223,11 @@ impl LiveSystem {
         let (ordering, metis_calls) = match plan {
             OrderingPlan::Amd => (Ordering::Amd, 0),
             OrderingPlan::MetisLiveSet => (Ordering::Custom(metis_nested_dissection(&pattern)?), 1),
-            OrderingPlan::Construction(c) => (Ordering::Custom(c.restrict(&numbered, points)), 0),
+            OrderingPlan::Construction(c) => {
+                let mut fwd = c.restrict(&numbered, points);
+                fwd.retain(|&d| (d as usize) < n);
+                (Ordering::Custom(fwd), 0)
+            }
         };
         let ordering_seconds = t.elapsed().as_secs_f64();
         let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
@@ -215,7 +241,8 @@ impl LiveSystem {
             tied,
             ..
         } = numbered;
-        let supported_r = reduced_supports(n, &node_dofs, &pairs, points, supported)?;
+        let mut supported_r = reduced_supports(n_all, &node_dofs, &pairs, points, supported)?;
+        supported_r.truncate(n);
         let live_elements = numbered_elements
             .into_iter()
             .map(|el| {
@@ -224,11 +251,19 @@ impl LiveSystem {
                     let k = k_unit[el.elem as usize].as_slice();
                     t.transpose() * DMatrix::from_column_slice(24, 24, k) * &t
                 });
-                LiveElement { k_unit, ..el }
+                let condensed = el.dofs.iter().all(|&d| d as usize >= n);
+                LiveElement {
+                    k_unit,
+                    condensed,
+                    ..el
+                }
             })
             .collect();
         Ok(LiveSystem {
             n,
+            n_condensed,
+            rock,
+            rock_matrix: None,
             index_of,
             pair_of_b,
             pairs,
@@ -244,6 +279,13 @@ impl LiveSystem {
                 seconds: ordering_seconds,
             },
         })
+    }
+
+    /// Unknowns with the condensed rock's: the length of the vectors of
+    /// [`LiveSystem::reduce`], [`LiveSystem::expand`] and
+    /// [`LiveSystem::add_element_vector`].
+    pub fn n_all(&self) -> usize {
+        self.n + self.n_condensed
     }
 
     /// Adds the element vector `f` (24 entries, global node order) as Tᵀf.
@@ -278,7 +320,7 @@ impl LiveSystem {
 
     /// Tᵀ g for a vector over the global node dofs.
     pub fn reduce(&self, g: &[f64], points: &[JointPoint]) -> Vec<f64> {
-        let mut out = vec![0.0; self.n];
+        let mut out = vec![0.0; self.n_all()];
         for &(gd, i) in &self.node_dofs {
             out[i as usize] += g[gd as usize];
         }
@@ -413,6 +455,7 @@ impl Numbered {
                     dofs,
                     terms,
                     k_unit: None,
+                    condensed: false,
                 });
             }
         }
@@ -436,6 +479,68 @@ impl Numbered {
     pub fn pattern(&self) -> Pattern {
         let lists: Vec<&[u32]> = self.elements.iter().map(|e| e.dofs.as_slice()).collect();
         Pattern::new(self.n, &lists)
+    }
+
+    /// The pattern of the first `n` unknowns (the others condensed): the
+    /// elements on them, then `rock`'s blocks of C, one slot each.
+    pub fn pattern_without(&self, n: usize, rock: Option<&CondensedRock>) -> Pattern {
+        let Some(rock) = rock else {
+            return self.pattern();
+        };
+        let mut lists: Vec<Vec<u32>> = self
+            .elements
+            .iter()
+            .map(|e| {
+                e.dofs
+                    .iter()
+                    .map(|&d| if d as usize >= n { NO_DOF } else { d })
+                    .collect()
+            })
+            .collect();
+        lists.extend(
+            rock.blocks
+                .iter()
+                .map(|b| b.dofs.iter().map(|&g| self.index_of[g as usize]).collect()),
+        );
+        Pattern::new(n, &lists)
+    }
+
+    /// Numbers `rock`'s unknowns last, in its order (`n − rock.n()..n`),
+    /// the others first in their order. False (nothing changed) unless
+    /// every unknown of `rock` is live and belongs to no pair.
+    fn condense(&mut self, rock: &CondensedRock) -> bool {
+        let n_r = rock.n();
+        let all_live = rock.dofs.iter().all(|&g| self.index_of[g as usize] != NONE);
+        if !all_live || n_r == 0 || n_r > self.n {
+            return false;
+        }
+        let mut new = vec![NONE; self.n];
+        for &g in &rock.dofs {
+            new[self.index_of[g as usize] as usize] =
+                (self.n - n_r) as u32 + rock.index[g as usize];
+        }
+        if self
+            .pairs
+            .iter()
+            .any(|p| p.first != NONE && new[p.first as usize] != NONE)
+        {
+            return false;
+        }
+        for (next, slot) in new.iter_mut().filter(|s| **s == NONE).enumerate() {
+            *slot = next as u32;
+        }
+        let map = |d: &mut u32| {
+            if *d != NONE {
+                *d = new[*d as usize];
+            }
+        };
+        self.index_of.iter_mut().for_each(map);
+        self.node_dofs.iter_mut().for_each(|(_, i)| map(i));
+        self.pairs.iter_mut().for_each(|p| map(&mut p.first));
+        self.elements
+            .iter_mut()
+            .for_each(|e| e.dofs.iter_mut().for_each(map));
+        true
     }
 
     /// The key of each reduced dof in the unknowns of the complete dam
@@ -521,6 +626,7 @@ impl ConstructionOrdering {
             live: &all,
             k_unit: &[],
             ties,
+            rock: None,
         };
         let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
         let fwd = metis_nested_dissection(&complete.pattern())?;
@@ -534,6 +640,41 @@ impl ConstructionOrdering {
             point_of_b,
             seconds: t.elapsed().as_secs_f64(),
         })
+    }
+
+    /// The global node dofs of the complete dam of `conn` (all of `points`
+    /// paired) whose columns are frozen in this order
+    /// ([`super::rock_condensation::frozen_columns`]): `rock_only(node)`
+    /// for them and every column below them. In elimination order.
+    pub fn frozen(
+        &self,
+        conn: &[[u32; 8]],
+        points: &[JointPoint],
+        rock_only: &dyn Fn(usize) -> bool,
+    ) -> Result<Vec<u32>, LiveError> {
+        let n_nodes = self.point_of_b.len();
+        let all = vec![true; conn.len()];
+        let pair_live = vec![true; points.len()];
+        let elements = ElementSet {
+            conn,
+            live: &all,
+            k_unit: &[],
+            ties: &RockTies::none(),
+            rock: None,
+        };
+        let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
+        let fwd = self.restrict(&complete, points);
+        let global: Vec<u32> = {
+            let mut g = vec![NONE; complete.n];
+            for &(gd, i) in &complete.node_dofs {
+                g[i as usize] = gd;
+            }
+            g
+        };
+        let frozen = super::rock_condensation::frozen_columns(&complete.pattern(), &fwd, &|d| {
+            global[d] != NONE && rock_only(global[d] as usize / 3)
+        });
+        Ok(frozen.into_iter().map(|d| global[d as usize]).collect())
     }
 
     /// The elimination order of a live set (`fwd[k]`: the reduced dof

@@ -40,6 +40,7 @@ pub mod grout_stops;
 pub mod joints;
 pub mod live;
 pub mod model;
+pub mod rock_condensation;
 pub mod rock_ties;
 pub mod settings;
 pub mod supports;

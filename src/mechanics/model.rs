@@ -1,6 +1,7 @@
 //! The mechanical model of the live elements and its incremental step.
 
 use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::SVector;
@@ -23,6 +24,7 @@ use super::contact_step::{
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
 use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
+use super::rock_condensation::{CondensedRock, RockElements};
 use super::rock_ties::RockTies;
 use super::settings::{JointMechanics, MechanicsSettings};
 
@@ -61,6 +63,8 @@ pub enum MechError {
     },
     #[error("prescribed displacement on node {node} component {comp}: the dof is not supported, or is on side b of a joint, or is tied to its rock grid line (solver.rock_coarsening)")]
     NotSupported { node: u32, comp: u8 },
+    #[error("condensing the rock: {0}")]
+    Condensation(SolveError),
     #[error("joints on day {day:.3}: {source}")]
     Joints { day: f64, source: JointStepError },
     #[error("mechanical unknowns on day {day:.3}: {source}")]
@@ -192,6 +196,20 @@ pub struct MechStats {
     /// `seconds_numeric`)
     #[serde(default)]
     pub ahead: AheadStats,
+    /// unknowns of the rock condensed once per run
+    /// ([`super::rock_condensation`]; not counted in `max_dofs`)
+    #[serde(default)]
+    pub condensed_dofs: usize,
+    /// wall time of that condensation [s]
+    #[serde(default)]
+    pub seconds_condensation: f64,
+    /// solves with the condensed rock's factor (a step's loads condensed
+    /// when the rock is loaded, its x_R recovered)
+    #[serde(default)]
+    pub rock_solves: usize,
+    /// wall time of the steps' condensing and recovering [s]
+    #[serde(default)]
+    pub seconds_rock: f64,
 }
 
 impl MechStats {
@@ -302,6 +320,8 @@ pub struct MechanicsModel {
     restored_guess: Option<FactorGuess>,
     /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
     ties: RockTies,
+    /// the rock condensed once per run (`solver.condense_rock`)
+    rock: Option<Arc<CondensedRock>>,
 }
 
 /// Per-element constants of the mechanical problem, computed once.
@@ -488,6 +508,13 @@ impl MechanicsModel {
                 OrderingPlan::Construction(std::sync::Arc::new(c))
             }
         };
+        let rock = condensed_rock(
+            mesh, settings, &tables, &ordering, &points, &supported, &ties,
+        )?;
+        if let Some((r, seconds)) = &rock {
+            stats.condensed_dofs = r.n();
+            stats.seconds_condensation = *seconds;
+        }
         let state =
             MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
         Ok(MechanicsModel {
@@ -522,6 +549,7 @@ impl MechanicsModel {
             ahead: FactorAhead::new(factor_ahead(settings)),
             restored_guess: None,
             ties,
+            rock: rock.map(|(r, _)| Arc::new(r)),
         })
     }
 
@@ -640,6 +668,7 @@ impl MechanicsModel {
             live,
             k_unit: &self.tables.k_unit,
             ties: &self.ties,
+            rock: self.rock.as_ref(),
         };
         let sys = LiveSystem::build(
             elements,
@@ -655,11 +684,43 @@ impl MechanicsModel {
         self.stats.seconds_analysis += sys.solver.stats().symbolic_seconds;
         self.stats.live_sets_factor_nnz += sys.solver.factor_nnz() as u64;
         self.stats.live_sets_factor_flops += sys.solver.factor_flops();
-        self.stats.max_dofs = self.stats.max_dofs.max(sys.n);
+        self.stats.max_dofs = self.stats.max_dofs.max(sys.n_all());
         let free = sys.supported.iter().filter(|&&s| !s).count();
         self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
+        let mut sys = sys;
+        sys.rock_matrix = self.rock_matrix(&sys)?;
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         Ok(sys)
+    }
+
+    /// The part of `sys`'s matrix no step changes: its rock elements (not
+    /// condensed) at the rock's modulus, and −C of the condensed rock, in
+    /// one slot per block after the elements. None without rock.
+    fn rock_matrix(&self, sys: &LiveSystem) -> Result<Option<SparseSym>, LiveError> {
+        let rock_slots: Vec<usize> = (0..sys.elements.len())
+            .filter(|&s| !self.tables.concrete[sys.elements[s].elem as usize])
+            .collect();
+        if rock_slots.is_empty() && sys.rock.is_none() {
+            return Ok(None);
+        }
+        let mut a = SparseSym::new(sys.pattern.clone());
+        for &slot in &rock_slots {
+            let el = &sys.elements[slot];
+            if el.condensed {
+                continue;
+            }
+            let e = el.elem as usize;
+            match &el.k_unit {
+                Some(k) => a.add_element_scaled(slot, self.tables.rock_modulus, k),
+                None => {
+                    a.add_element_scaled(slot, self.tables.rock_modulus, &self.tables.k_unit[e])
+                }
+            }
+        }
+        for (t, block) in sys.rock.iter().flat_map(|r| r.blocks.iter()).enumerate() {
+            a.add_element(sys.elements.len() + t, &block.minus_c);
+        }
+        Ok(Some(a))
     }
 
     /// The live system, guessed first states and K̃ of the next step, whose
@@ -849,17 +910,22 @@ impl MechanicsModel {
         } = self.assemble(k, temps);
         let (df_ext, water) = self.external_loads(water_level)?;
         let ext = self.sys.reduce(&df_ext, &self.points);
-        for i in 0..self.sys.n {
-            b[i] += ext[i];
+        for (b, e) in b.iter_mut().zip(&ext) {
+            *b += e;
         }
-        let prescribed = self.take_prescribed()?;
+        let Prescribed {
+            system: prescribed,
+            condensed: held,
+        } = self.take_prescribed()?;
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
+        let (b, condensed) = self.condense(b, &held, t1)?;
 
         let x = if self.sys.pairs.is_empty() {
             self.solve_plain(a, b, &prescribed, t1)?
         } else {
             self.solve_joints(&a, &b, &prescribed, t1, prepared)?
         };
+        let x = self.recover(x, condensed, t1)?;
 
         self.commit(&x, &coeffs, &pseudo, &mode_loads, &df_ext, water);
         self.stats.steps += 1;
@@ -877,15 +943,21 @@ impl MechanicsModel {
         t0: f64,
         t1: f64,
     ) -> Result<Assembled, MechError> {
-        let mut a = SparseSym::new(sys.pattern.clone());
+        let mut a = match &sys.rock_matrix {
+            Some(rock) => rock.clone(),
+            None => SparseSym::new(sys.pattern.clone()),
+        };
+        let rock_made = sys.rock_matrix.is_some();
         let mut coeffs = Vec::with_capacity(sys.elements.len());
         let mut born = Vec::with_capacity(sys.elements.len());
         for (slot, el) in sys.elements.iter().enumerate() {
             let e = el.elem as usize;
             let c = self.coefficients(e, birth[e], t0, t1)?;
-            match &el.k_unit {
-                Some(k) => a.add_element_scaled(slot, c.e_eff, k),
-                None => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
+            let constant = el.condensed || (rock_made && !self.tables.concrete[e]);
+            match (&el.k_unit, constant) {
+                (_, true) => {}
+                (Some(k), false) => a.add_element_scaled(slot, c.e_eff, k),
+                (None, false) => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
             }
             coeffs.push(c);
             born.push(birth[e]);
@@ -1005,7 +1077,7 @@ impl MechanicsModel {
             coeffs,
             ..
         } = k;
-        let mut b = vec![0.0; sys.n];
+        let mut b = vec![0.0; sys.n_all()];
         let mut pseudo: Vec<[[f64; 6]; 8]> = Vec::with_capacity(sys.elements.len());
         let mut mode_loads = Vec::new();
         for (slot, el) in sys.elements.iter().enumerate() {
@@ -1111,20 +1183,72 @@ impl MechanicsModel {
 
     /// The prescribed increments in the reduced unknowns; each is used by
     /// one step only.
-    fn take_prescribed(&mut self) -> Result<Vec<f64>, MechError> {
-        let mut prescribed = vec![0.0; self.sys.n];
+    fn take_prescribed(&mut self) -> Result<Prescribed, MechError> {
+        let n = self.sys.n;
+        let mut prescribed = Prescribed {
+            system: vec![0.0; n],
+            condensed: Vec::new(),
+        };
         for &(g, v) in &self.prescribed {
-            let i = self.sys.index_of[g as usize];
-            if i == NONE {
-                return Err(MechError::NotSupported {
-                    node: g / 3,
-                    comp: (g % 3) as u8,
-                });
+            match self.sys.index_of[g as usize] {
+                NONE => {
+                    return Err(MechError::NotSupported {
+                        node: g / 3,
+                        comp: (g % 3) as u8,
+                    })
+                }
+                i if i as usize >= n => prescribed.condensed.push((i - n as u32, v)),
+                i => prescribed.system[i as usize] = v,
             }
-            prescribed[i as usize] = v;
         }
         self.prescribed.clear();
         Ok(prescribed)
+    }
+
+    /// The loads `b` (over [`LiveSystem::n_all`]) on the system without the
+    /// condensed rock: b_D − A_DR A_RR⁻¹ b_R, with the rock's b_R, which
+    /// [`MechanicsModel::recover`] takes.
+    fn condense(
+        &mut self,
+        mut b: Vec<f64>,
+        held: &[(u32, f64)],
+        day: f64,
+    ) -> Result<(Vec<f64>, Condensed), MechError> {
+        let Some(rock) = &self.sys.rock else {
+            return Ok((b, None));
+        };
+        let t = Instant::now();
+        let b_r = b.split_off(self.sys.n);
+        let y = if held.is_empty() && b_r.iter().all(|&v| v == 0.0) {
+            b_r
+        } else {
+            self.stats.rock_solves += 1;
+            rock.condense(&b_r, held, &self.sys.index_of, &mut b)
+                .map_err(|source| MechError::Solve { day, source })?
+        };
+        self.stats.seconds_rock += t.elapsed().as_secs_f64();
+        Ok((b, Some(y)))
+    }
+
+    /// The step's solution `x_d` with the condensed rock's unknowns after
+    /// it (x_R = A_RR⁻¹ (b_R − A_RD x_D)).
+    fn recover(
+        &mut self,
+        mut x_d: Vec<f64>,
+        condensed: Condensed,
+        day: f64,
+    ) -> Result<Vec<f64>, MechError> {
+        let (Some(rock), Some(y)) = (&self.sys.rock, condensed) else {
+            return Ok(x_d);
+        };
+        let t = Instant::now();
+        let x_r = rock
+            .recover(&y, &self.sys.index_of, &x_d)
+            .map_err(|source| MechError::Solve { day, source })?;
+        x_d.extend(x_r);
+        self.stats.rock_solves += 1;
+        self.stats.seconds_rock += t.elapsed().as_secs_f64();
+        Ok(x_d)
     }
 
     /// The step with joints: the contact solve of [`contact_step`].
@@ -1399,9 +1523,10 @@ impl MechanicsModel {
         })
     }
 
-    /// Number of mechanical dofs live in the last step (0 before the first).
+    /// Number of mechanical dofs live in the last step (0 before the
+    /// first), the condensed rock's included.
     pub fn live_dofs(&self) -> usize {
-        self.sys.n
+        self.sys.n_all()
     }
 
     /// The rows of the live joint pairs and their neighbours, which a
@@ -1441,6 +1566,58 @@ impl MechanicsModel {
 /// Whether the settings let a step be factorised ahead: the active set
 /// with the capacitance correction (which takes the rows that changed
 /// since), and `solver.factor_ahead`.
+/// [`CondensedRock::condense`]'s y = A_RR⁻¹ b_R, when the rock is condensed.
+type Condensed = Option<Vec<f64>>;
+
+/// A step's prescribed increments: over the system's unknowns, and the
+/// condensed rock's (its index, the increment).
+struct Prescribed {
+    system: Vec<f64>,
+    condensed: Vec<(u32, f64)>,
+}
+
+/// The rock to condense once per run and the seconds it took: with
+/// `solver.condense_rock`, the construction ordering, no tied rock and some
+/// column frozen ([`super::rock_condensation`]).
+fn condensed_rock(
+    mesh: &Mesh,
+    settings: &MechanicsSettings,
+    tables: &ElementTables,
+    ordering: &OrderingPlan,
+    points: &[JointPoint],
+    supported: &[bool],
+    ties: &RockTies,
+) -> Result<Option<(CondensedRock, f64)>, MechError> {
+    let OrderingPlan::Construction(c) = ordering else {
+        return Ok(None);
+    };
+    if !settings.condense_rock || ties.count() > 0 {
+        return Ok(None);
+    }
+    let t = Instant::now();
+    let rock: Vec<bool> = tables.concrete.iter().map(|&c| !c).collect();
+    let mut rock_only = vec![true; mesh.nodes.len()];
+    let mut used = vec![false; mesh.nodes.len()];
+    for (e, conn) in mesh.elements.iter().enumerate() {
+        for &v in conn {
+            used[v as usize] = true;
+            rock_only[v as usize] &= rock[e];
+        }
+    }
+    let frozen = c
+        .frozen(&mesh.elements, points, &|v| used[v] && rock_only[v])
+        .map_err(|source| MechError::Live { day: 0.0, source })?;
+    let elements = RockElements {
+        conn: &mesh.elements,
+        rock: &rock,
+        k_unit: &tables.k_unit,
+        modulus: tables.rock_modulus,
+        supported,
+    };
+    let condensed = CondensedRock::new(&elements, &frozen).map_err(MechError::Condensation)?;
+    Ok(condensed.map(|r| (r, t.elapsed().as_secs_f64())))
+}
+
 fn factor_ahead(settings: &MechanicsSettings) -> bool {
     let j = &settings.joint;
     settings.factor_ahead && j.capacitance && j.solver == crate::scene::ContactSolverKind::ActiveSet

@@ -104,6 +104,9 @@ pub struct MechanicsSettings {
     /// others to them (`solver.rock_coarsening`; 1: none;
     /// [`super::rock_ties`]).
     pub rock_coarsening: u32,
+    /// Condense the rock no step changes once per run
+    /// (`solver.condense_rock`; [`super::rock_condensation`]).
+    pub condense_rock: bool,
 }
 
 impl MechanicsSettings {
@@ -164,6 +167,7 @@ impl MechanicsSettings {
             element: scene.solver.element,
             factor_ahead: scene.solver.factor_ahead,
             rock_coarsening: scene.solver.rock_coarsening,
+            condense_rock: scene.solver.condense_rock,
         })
     }
 }

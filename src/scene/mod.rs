@@ -522,6 +522,14 @@ pub struct SolverSettings {
     /// accuracy`. Not written when 1 (restart fingerprints).
     #[serde(skip_serializing_if = "is_one")]
     pub rock_coarsening: u32,
+    /// Mechanics: condense once per run the rock whose columns of the
+    /// factor no step changes (the rock-only subtrees of the construction
+    /// ordering's elimination tree; [`crate::mechanics::rock_condensation`]):
+    /// the same answer to round-off, default true. Only with `ordering =
+    /// "metis"` and `rock_coarsening = 1`. Not written when true (restart
+    /// fingerprints of older scenes).
+    #[serde(skip_serializing_if = "is_true")]
+    pub condense_rock: bool,
 }
 
 fn is_one(v: &u32) -> bool {
@@ -609,6 +617,7 @@ impl Default for SolverSettings {
             element: SolidElement::Hex8,
             factor_ahead: true,
             rock_coarsening: 1,
+            condense_rock: true,
         }
     }
 }
