@@ -47,6 +47,7 @@ use std::sync::Arc;
 
 use faer::{Mat, Par};
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 
 use crate::fem::{CholeskySolver, Ordering, Pattern, SolveError, SparseSym, NO_DOF};
 
@@ -248,24 +249,26 @@ impl CondensedRock {
                     .map(move |&(r, g, v)| (t, r, dofs.binary_search(&g).unwrap_or(usize::MAX), v))
             })
             .collect();
+        let widest = boundaries.iter().map(Vec::len).max().unwrap_or(0);
         let mut c: Vec<DMatrix<f64>> = boundaries
             .iter()
             .map(|d| DMatrix::zeros(d.len(), d.len()))
             .collect();
-        let widest = boundaries.iter().map(Vec::len).max().unwrap_or(0);
-        for start in (0..widest).step_by(CHUNK) {
-            let w = CHUNK.min(widest - start);
-            let mut z = Mat::<f64>::zeros(n, w);
-            for &(_, r, j, v) in &entries {
-                if (start..start + w).contains(&j) {
-                    z[(r as usize, j - start)] += v;
-                }
-            }
-            self.solver.solve_columns(&mut z)?;
-            for &(t, r, i, v) in &entries {
-                let nb = boundaries[t].len();
-                for j in start..(start + w).min(nb) {
-                    c[t][(i, j)] -= v * z[(r as usize, j - start)];
+        // two chunks at a time, one per core, each a solve of its own
+        // right-hand sides, copied into C before the next two
+        let starts: Vec<usize> = (0..widest).step_by(CHUNK).collect();
+        for pair in starts.chunks(2) {
+            let slabs: Vec<Vec<DMatrix<f64>>> = pair
+                .par_iter()
+                .map(|&start| {
+                    self.chunk(n, start, CHUNK.min(widest - start), &entries, &boundaries)
+                })
+                .collect::<Result<_, _>>()?;
+            for (&start, slab) in pair.iter().zip(slabs) {
+                for (ct, st) in c.iter_mut().zip(slab) {
+                    for j in 0..st.ncols() {
+                        ct.column_mut(start + j).copy_from(&st.column(j));
+                    }
                 }
             }
         }
@@ -275,6 +278,39 @@ impl CondensedRock {
             .zip(c)
             .map(|(dofs, minus_c)| SchurBlock { dofs, minus_c })
             .collect())
+    }
+}
+
+impl CondensedRock {
+    /// Columns `start..start + w` of every subtree's −C_T (a subtree with
+    /// fewer boundary columns gets those it has): one solve with `w`
+    /// right-hand sides, the j-th carrying every subtree's j-th column.
+    fn chunk(
+        &self,
+        n: usize,
+        start: usize,
+        w: usize,
+        entries: &[(usize, u32, usize, f64)],
+        boundaries: &[Vec<u32>],
+    ) -> Result<Vec<DMatrix<f64>>, SolveError> {
+        let mut z = Mat::<f64>::zeros(n, w);
+        for &(_, r, j, v) in entries {
+            if (start..start + w).contains(&j) {
+                z[(r as usize, j - start)] += v;
+            }
+        }
+        self.solver.solve_columns(&mut z)?;
+        let mut slab: Vec<DMatrix<f64>> = boundaries
+            .iter()
+            .map(|d| DMatrix::zeros(d.len(), w.min(d.len().saturating_sub(start))))
+            .collect();
+        for &(t, r, i, v) in entries {
+            let st = &mut slab[t];
+            for j in 0..st.ncols() {
+                st[(i, j)] -= v * z[(r as usize, j)];
+            }
+        }
+        Ok(slab)
     }
 }
 
