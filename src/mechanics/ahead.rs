@@ -185,8 +185,9 @@ struct Made {
     prepared: Prepared,
     /// the states its rows and springs were guessed from
     states: Vec<JointPointState>,
-    /// K̃ of that step, as assembled ahead
-    assembled: Assembled,
+    /// K̃ of that step, as assembled ahead; None once the step has taken
+    /// it ([`FactorAhead::assembled`])
+    assembled: Option<Assembled>,
 }
 
 impl Made {
@@ -379,7 +380,12 @@ impl FactorAhead {
         a: &SparseSym,
     ) -> Option<Prepared> {
         let made = self.ready.take()?;
-        if !made.is_for(t0, t1, live) || made.assembled.stiffness.values() != a.values() {
+        // a K̃ the step took from here is the one factorised by construction
+        let same_k = made
+            .assembled
+            .as_ref()
+            .is_none_or(|m| m.stiffness.values() == a.values());
+        if !made.is_for(t0, t1, live) || !same_k {
             self.stats.discarded += 1;
             if let Target::Solver(s) = made.target {
                 if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) {
@@ -396,25 +402,30 @@ impl FactorAhead {
         Some(made.prepared)
     }
 
-    /// A copy of the K̃ and coefficients made ahead for the step over
-    /// (t0, t1) on `live`, if its elements were born on the days they were
-    /// assembled for (`birth`, per element).
+    /// The K̃ and coefficients made ahead for the step over (t0, t1) on
+    /// `live`, if its elements were born on the days they were assembled
+    /// for (`birth`, per element): taken, not copied (the step's K̃ is then
+    /// the one factorised, which [`FactorAhead::take`] need not compare).
     pub fn assembled(
-        &self,
+        &mut self,
         t0: f64,
         t1: f64,
         live: &LiveSystem,
         birth: &[f64],
     ) -> Option<Assembled> {
-        let made = self.ready.as_ref()?;
-        let a = &made.assembled;
+        let made = self.ready.as_mut()?;
+        let a = made.assembled.as_ref()?;
         let same_births = live.elements.len() == a.born.len()
             && live
                 .elements
                 .iter()
                 .zip(&a.born)
                 .all(|(el, &b)| birth[el.elem as usize].to_bits() == b.to_bits());
-        (made.is_for(t0, t1, live) && same_births).then(|| a.clone())
+        if made.is_for(t0, t1, live) && same_births {
+            made.assembled.take()
+        } else {
+            None
+        }
     }
 
     /// The next step when its factorisation is due now (once per step: it
@@ -446,7 +457,7 @@ impl FactorAhead {
                 target,
                 prepared: order.prepared,
                 states: order.states,
-                assembled: order.assembled,
+                assembled: Some(order.assembled),
             },
         })
     }

@@ -1060,7 +1060,7 @@ impl MechanicsModel {
 
     /// The stiffness of the live elements at their mid-step ages and their
     /// coefficients (made ahead when they were: [`FactorAhead::assembled`]).
-    fn step_stiffness(&self, t0: f64, t1: f64) -> Result<Assembled, MechError> {
+    fn step_stiffness(&mut self, t0: f64, t1: f64) -> Result<Assembled, MechError> {
         let (sys, birth) = (&self.sys, &self.state.birth_day);
         match self.ahead.assembled(t0, t1, sys, birth) {
             Some(made) => Ok(made),
