@@ -508,40 +508,21 @@ mod tests {
         usize,
     ) {
         let m = 8usize;
-        let node = |i: usize, j: usize, k: usize| (i + (m + 1) * (j + (m + 1) * k)) as u32;
-        let mut conn = Vec::new();
-        let mut rock = Vec::new();
-        let mut k_unit = Vec::new();
+        // the corners in VTK order, as offsets on the grid
+        let corners = crate::fem::hex8::NODES.map(|p| p.map(|v| (v > 0.0) as usize));
+        let (mut conn, mut rock, mut k_unit) = (Vec::new(), Vec::new(), Vec::new());
         for k in 0..m {
             for j in 0..m {
                 for i in 0..m {
-                    conn.push([
-                        node(i, j, k),
-                        node(i + 1, j, k),
-                        node(i + 1, j + 1, k),
-                        node(i, j + 1, k),
-                        node(i, j, k + 1),
-                        node(i + 1, j, k + 1),
-                        node(i + 1, j + 1, k + 1),
-                        node(i, j + 1, k + 1),
-                    ]);
+                    let at = |c: [usize; 3]| [i + c[0], j + c[1], k + c[2]];
+                    conn.push(corners.map(|c| {
+                        let [x, y, z] = at(c);
+                        (x + (m + 1) * (y + (m + 1) * z)) as u32
+                    }));
                     rock.push(k < 3 * m / 4);
-                    let coords: [[f64; 3]; 8] = std::array::from_fn(|c| {
-                        let (di, dj, dk) = [
-                            (0, 0, 0),
-                            (1, 0, 0),
-                            (1, 1, 0),
-                            (0, 1, 0),
-                            (0, 0, 1),
-                            (1, 0, 1),
-                            (1, 1, 1),
-                            (0, 1, 1),
-                        ][c];
-                        [
-                            (i + di) as f64,
-                            (j + dj) as f64 * 1.3,
-                            (k + dk) as f64 * 0.8,
-                        ]
+                    let coords = corners.map(|c| {
+                        let [x, y, z] = at(c);
+                        [x as f64, y as f64 * 1.3, z as f64 * 0.8]
                     });
                     let g = crate::fem::elasticity::gauss_points(&coords).unwrap();
                     let q = crate::fem::elasticity::poisson_matrix(0.22);
