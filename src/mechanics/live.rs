@@ -507,10 +507,13 @@ impl Numbered {
 
     /// Numbers `rock`'s unknowns last, in its order (`n − rock.n()..n`),
     /// the others first in their order. False (nothing changed) unless
-    /// every unknown of `rock` is live and belongs to no pair.
+    /// every unknown of `rock` and of its blocks' boundaries has an unknown
+    /// of its own (live, not on side b of a pair) and none is a pair's.
     fn condense(&mut self, rock: &CondensedRock) -> bool {
         let n_r = rock.n();
-        let all_live = rock.dofs.iter().all(|&g| self.index_of[g as usize] != NONE);
+        let own = |g: &u32| self.index_of[*g as usize] != NONE;
+        let all_live =
+            rock.dofs.iter().all(own) && rock.blocks.iter().all(|b| b.dofs.iter().all(own));
         if !all_live || n_r == 0 || n_r > self.n {
             return false;
         }

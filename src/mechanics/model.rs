@@ -694,8 +694,10 @@ impl MechanicsModel {
     }
 
     /// The part of `sys`'s matrix no step changes: its rock elements (not
-    /// condensed) at the rock's modulus, and −C of the condensed rock, in
-    /// one slot per block after the elements. None without rock.
+    /// condensed) at the rock's modulus (the e_eff of a step's
+    /// coefficients: the rock neither ages nor creeps), and −C of the
+    /// condensed rock, in one slot per block after the elements. None
+    /// without rock.
     fn rock_matrix(&self, sys: &LiveSystem) -> Result<Option<SparseSym>, LiveError> {
         let rock_slots: Vec<usize> = (0..sys.elements.len())
             .filter(|&s| !self.tables.concrete[sys.elements[s].elem as usize])
