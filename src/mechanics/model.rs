@@ -23,7 +23,9 @@ use super::contact_step::{
 };
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::live::{ConstructionOrdering, ElementSet, LiveError, LiveSystem, OrderingPlan, NONE};
+use super::live::{
+    ConstructionOrdering, ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan, NONE,
+};
 use super::rock_condensation::{CondensedRock, RockElements};
 use super::rock_ties::RockTies;
 use super::settings::{JointMechanics, MechanicsSettings};
@@ -670,7 +672,7 @@ impl MechanicsModel {
             ties: &self.ties,
             rock: self.rock.as_ref(),
         };
-        let sys = LiveSystem::build(
+        let mut sys = LiveSystem::build(
             elements,
             &self.points,
             pair_live,
@@ -687,8 +689,7 @@ impl MechanicsModel {
         self.stats.max_dofs = self.stats.max_dofs.max(sys.n_all());
         let free = sys.supported.iter().filter(|&&s| !s).count();
         self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
-        let mut sys = sys;
-        sys.rock_matrix = self.rock_matrix(&sys)?;
+        sys.rock_matrix = self.rock_matrix(&sys);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         Ok(sys)
     }
@@ -698,31 +699,30 @@ impl MechanicsModel {
     /// coefficients: the rock neither ages nor creeps), and −C of the
     /// condensed rock, in one slot per block after the elements. None
     /// without rock.
-    fn rock_matrix(&self, sys: &LiveSystem) -> Result<Option<SparseSym>, LiveError> {
-        let rock_slots: Vec<usize> = (0..sys.elements.len())
-            .filter(|&s| !self.tables.concrete[sys.elements[s].elem as usize])
-            .collect();
-        if rock_slots.is_empty() && sys.rock.is_none() {
-            return Ok(None);
+    fn rock_matrix(&self, sys: &LiveSystem) -> Option<SparseSym> {
+        let rock = |el: &&LiveElement| !self.tables.concrete[el.elem as usize];
+        if sys.rock.is_none() && !sys.elements.iter().any(|el| rock(&el)) {
+            return None;
         }
         let mut a = SparseSym::new(sys.pattern.clone());
-        for &slot in &rock_slots {
-            let el = &sys.elements[slot];
-            if el.condensed {
-                continue;
-            }
-            let e = el.elem as usize;
-            match &el.k_unit {
-                Some(k) => a.add_element_scaled(slot, self.tables.rock_modulus, k),
-                None => {
-                    a.add_element_scaled(slot, self.tables.rock_modulus, &self.tables.k_unit[e])
-                }
+        for (slot, el) in sys.elements.iter().enumerate() {
+            if rock(&el) && !el.condensed {
+                self.add_stiffness(&mut a, slot, el, self.tables.rock_modulus);
             }
         }
         for (t, block) in sys.rock.iter().flat_map(|r| r.blocks.iter()).enumerate() {
             a.add_element(sys.elements.len() + t, &block.minus_c);
         }
-        Ok(Some(a))
+        Some(a)
+    }
+
+    /// Adds `modulus` times the unit-modulus stiffness of the live element
+    /// `el` (slot `slot`) to `a`.
+    fn add_stiffness(&self, a: &mut SparseSym, slot: usize, el: &LiveElement, modulus: f64) {
+        match &el.k_unit {
+            Some(k) => a.add_element_scaled(slot, modulus, k),
+            None => a.add_element_scaled(slot, modulus, &self.tables.k_unit[el.elem as usize]),
+        }
     }
 
     /// The live system, guessed first states and K̃ of the next step, whose
@@ -956,10 +956,8 @@ impl MechanicsModel {
             let e = el.elem as usize;
             let c = self.coefficients(e, birth[e], t0, t1)?;
             let constant = el.condensed || (rock_made && !self.tables.concrete[e]);
-            match (&el.k_unit, constant) {
-                (_, true) => {}
-                (Some(k), false) => a.add_element_scaled(slot, c.e_eff, k),
-                (None, false) => a.add_element_scaled(slot, c.e_eff, &self.tables.k_unit[e]),
+            if !constant {
+                self.add_stiffness(&mut a, slot, el, c.e_eff);
             }
             coeffs.push(c);
             born.push(birth[e]);
