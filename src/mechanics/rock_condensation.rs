@@ -45,6 +45,9 @@
 
 use std::sync::Arc;
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::simplicial;
+use faer::sparse::SymbolicSparseColMatRef;
 use faer::{Mat, Par};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -447,7 +450,8 @@ fn components(pattern: &Pattern, held: &[bool]) -> Vec<u32> {
 
 /// The frozen unknowns of a complete pattern eliminated in `fwd` (`fwd[k]`
 /// the unknown eliminated k-th): those whose column of the elimination tree
-/// and every column below it satisfy `rock_only`. In elimination order.
+/// (faer's, of the permuted pattern) and every column below it satisfy
+/// `rock_only`. In elimination order.
 pub fn frozen_columns(
     pattern: &Pattern,
     fwd: &[u32],
@@ -458,34 +462,41 @@ pub fn frozen_columns(
     for (k, &d) in fwd.iter().enumerate() {
         inv[d as usize] = k as u32;
     }
-    // the smaller neighbours of each column, in elimination positions
+    // the upper triangle of the permuted pattern, column by column
     let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-    let mut lower: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut upper: Vec<Vec<u32>> = vec![Vec::new(); n];
     for j in 0..n {
         for &i in &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize] {
             let (pi, pj) = (inv[i as usize], inv[j]);
-            if pi != pj {
-                lower[pi.max(pj) as usize].push(pi.min(pj));
-            }
+            upper[pi.max(pj) as usize].push(pi.min(pj));
         }
     }
-    // Liu's elimination tree with path compression
-    let mut parent = vec![NONE; n];
-    let mut ancestor = vec![NONE; n];
-    for (k, below) in lower.iter().enumerate() {
-        for &i in below {
-            let mut r = i;
-            while ancestor[r as usize] != NONE && ancestor[r as usize] != k as u32 {
-                let next = ancestor[r as usize];
-                ancestor[r as usize] = k as u32;
-                r = next;
-            }
-            if ancestor[r as usize] == NONE {
-                ancestor[r as usize] = k as u32;
-                parent[r as usize] = k as u32;
-            }
-        }
+    let mut ptr = Vec::with_capacity(n + 1);
+    ptr.push(0u32);
+    let mut rows = Vec::new();
+    for col in &mut upper {
+        col.sort_unstable();
+        rows.extend_from_slice(col);
+        ptr.push(rows.len() as u32);
     }
+    drop(upper);
+    // faer's elimination tree of it (−1 at a root)
+    let permuted = SymbolicSparseColMatRef::new_checked(n, n, &ptr, None, &rows);
+    let (mut etree, mut counts) = (vec![0i32; n], vec![0u32; n]);
+    let mut mem = MemBuffer::new(simplicial::prefactorize_symbolic_cholesky_scratch::<u32>(
+        n,
+        rows.len(),
+    ));
+    simplicial::prefactorize_symbolic_cholesky(
+        &mut etree,
+        &mut counts,
+        permuted,
+        MemStack::new(&mut mem),
+    );
+    let parent: Vec<u32> = etree
+        .iter()
+        .map(|&p| if p < 0 { NONE } else { p as u32 })
+        .collect();
     let mut frozen: Vec<bool> = fwd.iter().map(|&d| rock_only(d as usize)).collect();
     for k in 0..n {
         if !frozen[k] && parent[k] != NONE {
