@@ -151,37 +151,49 @@ impl FlatElements {
         &self.dofs[self.ptr[e]..self.ptr[e + 1]]
     }
 
-    /// The dofs of element `e` in the system, each once.
-    fn unique_dofs(&self, e: usize) -> impl Iterator<Item = usize> + '_ {
+    /// The dofs of element `e` in the system, each once, with their first
+    /// place in the element's list.
+    fn unique_dofs(&self, e: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
         let d = self.dofs(e);
         d.iter()
             .enumerate()
             .filter(move |&(k, &x)| x != NO_DOF && !d[..k].contains(&x))
-            .map(|(_, &x)| x as usize)
+            .map(|(k, &x)| (k, x as usize))
     }
 
-    /// dof → incident elements (each element listed once per dof), as
-    /// `inc[inc_ptr[d]..inc_ptr[d + 1]]`.
-    fn incidence(&self, n: usize) -> (Vec<usize>, Vec<u32>) {
-        let mut inc_ptr = vec![0usize; n + 1];
+    /// dof → incident elements (each element listed once per dof) and the
+    /// dof's first place in the element, as `inc[inc_ptr[d]..inc_ptr[d + 1]]`
+    /// and `first[inc_ptr[d]..inc_ptr[d + 1]]`.
+    fn incidence(&self, n: usize) -> Incidence {
+        let mut ptr = vec![0usize; n + 1];
         for e in 0..self.len() {
-            for d in self.unique_dofs(e) {
-                inc_ptr[d + 1] += 1;
+            for (_, d) in self.unique_dofs(e) {
+                ptr[d + 1] += 1;
             }
         }
         for j in 0..n {
-            inc_ptr[j + 1] += inc_ptr[j];
+            ptr[j + 1] += ptr[j];
         }
-        let mut fill = inc_ptr.clone();
-        let mut inc = vec![0u32; inc_ptr[n]];
+        let mut fill = ptr.clone();
+        let mut elem = vec![0u32; ptr[n]];
+        let mut first = vec![0u32; ptr[n]];
         for e in 0..self.len() {
-            for d in self.unique_dofs(e) {
-                inc[fill[d]] = e as u32;
+            for (k, d) in self.unique_dofs(e) {
+                elem[fill[d]] = e as u32;
+                first[fill[d]] = k as u32;
                 fill[d] += 1;
             }
         }
-        (inc_ptr, inc)
+        Incidence { ptr, elem, first }
     }
+}
+
+/// The elements incident to each dof ([`FlatElements::incidence`]).
+struct Incidence {
+    ptr: Vec<usize>,
+    elem: Vec<u32>,
+    /// the dof's first place in the element's list
+    first: Vec<u32>,
 }
 
 /// The upper triangle in CSC form and the scatter map of every element.
@@ -196,15 +208,10 @@ impl Columns {
     /// Column by column: the rows ≤ j coupled to j through an incident
     /// element, sorted, then the value index of every local pair of those
     /// elements that lands in column j.
-    fn build(
-        n: usize,
-        el: &FlatElements,
-        inc_ptr: &[usize],
-        inc: &[u32],
-    ) -> Result<Self, PatternError> {
+    fn build(n: usize, el: &FlatElements, inc: &Incidence) -> Result<Self, PatternError> {
         let mut col_ptr = Vec::with_capacity(n + 1);
         col_ptr.push(0u32);
-        let mut row_idx: Vec<u32> = Vec::with_capacity(inc.len() * 4 + n);
+        let mut row_idx: Vec<u32> = Vec::with_capacity(inc.elem.len() * 4 + n);
         let mut diag_idx = Vec::with_capacity(n);
         let mut scatter = vec![SKIP; *el.scatter_ptr.last().unwrap_or(&0)];
         let mut mark = vec![u32::MAX; n];
@@ -214,7 +221,8 @@ impl Columns {
             rows.clear();
             rows.push(j as u32);
             mark[j] = j as u32;
-            let incident = &inc[inc_ptr[j]..inc_ptr[j + 1]];
+            let (lo, hi) = (inc.ptr[j], inc.ptr[j + 1]);
+            let incident = &inc.elem[lo..hi];
             for &e in incident {
                 for &d in el.dofs(e as usize) {
                     if d != NO_DOF && (d as usize) < j && mark[d as usize] != j as u32 {
@@ -236,10 +244,10 @@ impl Columns {
             row_idx.extend_from_slice(&rows);
             diag_idx.push(pos[j]);
             col_ptr.push(row_idx.len() as u32);
-            for &e in incident {
+            for (&e, &first) in incident.iter().zip(&inc.first[lo..hi]) {
                 let e = e as usize;
                 let sc = &mut scatter[el.scatter_ptr[e]..el.scatter_ptr[e + 1]];
-                scatter_column(j, el.dofs(e), &pos, sc);
+                scatter_column(j, el.dofs(e), first as usize, &pos, sc);
             }
         }
         row_idx.shrink_to_fit();
@@ -254,9 +262,12 @@ impl Columns {
 
 /// The scatter entries of one element in column `j`: every local pair
 /// (a, b) with dof b = j and dof a ≤ j gets the value index `pos[dof a]`.
-fn scatter_column(j: usize, dofs: &[u32], pos: &[u32], sc: &mut [u32]) {
+/// `first` is j's first place in `dofs`: the places before it are not j,
+/// so an element costs its size squared, not cubed (the condensed rock's
+/// dense blocks have hundreds of dofs).
+fn scatter_column(j: usize, dofs: &[u32], first: usize, pos: &[u32], sc: &mut [u32]) {
     let ne = dofs.len();
-    for (b, &db) in dofs.iter().enumerate() {
+    for (b, &db) in dofs.iter().enumerate().skip(first) {
         if db as usize != j {
             continue;
         }
@@ -280,8 +291,8 @@ impl Pattern {
         }
         let n = n_dofs;
         let el = FlatElements::new(n, elements)?;
-        let (inc_ptr, inc) = el.incidence(n);
-        let cols = Columns::build(n, &el, &inc_ptr, &inc)?;
+        let inc = el.incidence(n);
+        let cols = Columns::build(n, &el, &inc)?;
         let pattern = Pattern {
             n,
             col_ptr: cols.col_ptr,

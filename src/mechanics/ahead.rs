@@ -103,11 +103,16 @@ pub struct AheadStats {
     pub used: usize,
     /// made for an interval or live system the next step did not have
     pub discarded: usize,
-    /// factorisations that failed (the step then factorises itself and
-    /// reports the error)
+    /// factorisations (or analyses of the next live system) that failed
+    /// (the step then rebuilds or factorises itself and reports the error)
     pub failed: usize,
     /// wall time of the factorisations ahead, on the second core [s]
     pub seconds: f64,
+    /// wall time of the next live systems' analyses and K̃ (lifts poured
+    /// at the next step's start), each on a thread of its own from its
+    /// order (the factorisation waits for it) [s]
+    #[serde(default)]
+    pub seconds_analysed: f64,
     /// time the step waited for a factorisation ahead to finish [s]
     pub seconds_waited: f64,
 }
@@ -183,8 +188,6 @@ struct Made {
     interval: (f64, f64),
     target: Target,
     prepared: Prepared,
-    /// the states its rows and springs were guessed from
-    states: Vec<JointPointState>,
     /// K̃ of that step, as assembled ahead; None once the step has taken
     /// it ([`FactorAhead::assembled`])
     assembled: Option<Assembled>,
@@ -202,46 +205,73 @@ impl Made {
     }
 }
 
+/// The next live system's analysis, its step's K̃ and the first pass's
+/// matrix, made on a thread of their own from the moment the step is
+/// ordered: None when the analysis or the assembly fails (the step then
+/// rebuilds and reports the error).
+pub type BuildBirths = JoinHandle<Option<Analysed>>;
+
+/// The next step's own live system, analysed ahead with its K̃ and the
+/// matrix of its first pass.
+pub struct Analysed {
+    pub births: Births,
+    pub assembled: Assembled,
+    pub prepared: Prepared,
+    /// wall time of the analysis and assembly [s]
+    pub seconds: f64,
+}
+
 /// The next step's factorisation but the solver it is made in: its
-/// interval, K̃, the matrix of its first pass and the states that matrix
-/// was guessed from. Made before the step waits for its own factor, so
-/// the other core starts on it as soon as it is free ([`FactorAhead::job`]).
+/// interval, the states its first pass is guessed from, and its K̃ and
+/// first-pass matrix or what makes them. Made before the step waits for
+/// its own factor, so the other core starts on it as soon as it is free
+/// ([`FactorAhead::job`]).
 pub struct Order {
     interval: (f64, f64),
-    assembled: Assembled,
-    /// `None`: this live system; otherwise the next step's own
-    births: Option<Box<Births>>,
-    prepared: Prepared,
     states: Vec<JointPointState>,
+    work: Work,
+}
+
+/// What a job does before it factorises.
+enum Work {
+    /// nothing: K̃ and the first pass's matrix on this live system are made
+    Made {
+        assembled: Assembled,
+        prepared: Prepared,
+    },
+    /// the next step pours lifts: its live system is being numbered and
+    /// analysed, its K̃ assembled, off the step's thread
+    Births(BuildBirths),
 }
 
 impl Order {
-    /// The order for the next step's factor over `interval`, whose K̃ is
-    /// `assembled`, on `live` or, when its start pours lifts, on `births`,
-    /// guessed from this step's start `states`.
+    /// The order for the next step's factor over `interval` on `live`,
+    /// whose K̃ is `assembled`, guessed from this step's start `states`.
     pub fn new(
         interval: (f64, f64),
         assembled: Assembled,
-        births: Option<Births>,
         live: &LiveSystem,
         states: &[JointPointState],
     ) -> Order {
-        let mut states = states.to_vec();
-        let prepared = match &births {
-            None => Prepared::first_pass(&assembled.stiffness, live, &states),
-            Some(births) => {
-                for &(p, st) in &births.paired {
-                    states[p] = st;
-                }
-                Prepared::first_pass(&assembled.stiffness, &births.sys, &states)
-            }
-        };
+        let prepared = Prepared::first_pass(&assembled.stiffness, live, states);
         Order {
             interval,
-            assembled,
-            births: births.map(Box::new),
-            prepared,
+            states: states.to_vec(),
+            work: Work::Made {
+                assembled,
+                prepared,
+            },
+        }
+    }
+
+    /// The order for the next step's factor over `interval` on its own live
+    /// system, which `build` is making; `states` are this step's
+    /// start states with the new pairs as a rebuild starts them.
+    pub fn births(interval: (f64, f64), states: Vec<JointPointState>, build: BuildBirths) -> Order {
+        Order {
+            interval,
             states,
+            work: Work::Births(build),
         }
     }
 }
@@ -259,39 +289,84 @@ pub struct FactorGuess {
 
 /// A factorisation to run on the other core.
 pub struct Job {
-    made: Made,
+    interval: (f64, f64),
+    states: Vec<JointPointState>,
+    work: Work,
+    /// the solver to factorise into, on this live system (for
+    /// [`Work::Made`])
+    solver: Option<CholeskySolver>,
 }
 
 /// A finished [`Job`].
 pub struct Done {
-    made: Made,
+    /// None when the next live system could not be analysed
+    made: Option<Made>,
     result: Result<(), SolveError>,
     seconds: f64,
+    /// the next live system's analysis and assembly, on a thread of its own
+    analysed: f64,
 }
 
 impl Job {
     /// What the factor is guessed from (a checkpoint carries it).
     pub fn guess(&self) -> FactorGuess {
         FactorGuess {
-            interval: self.made.interval,
-            states: self.made.states.clone(),
+            interval: self.interval,
+            states: self.states.clone(),
         }
     }
 
-    /// Spawns the factorisation on a thread of its own.
+    /// Spawns the analysis, if any, and the factorisation on a thread of
+    /// its own.
     fn spawn(self) -> JoinHandle<Done> {
         std::thread::spawn(move || {
-            let mut made = self.made;
             let t = Instant::now();
+            let mut analysed = 0.0;
+            let Job {
+                interval,
+                work,
+                solver,
+                ..
+            } = self;
+            let (target, assembled, prepared) = match work {
+                Work::Made {
+                    assembled,
+                    prepared,
+                } => {
+                    let solver = solver.expect("a job on this live system has its solver");
+                    (Target::Solver(solver), assembled, prepared)
+                }
+                Work::Births(build) => match build.join().ok().flatten() {
+                    Some(a) => {
+                        analysed = a.seconds;
+                        (Target::Born(Box::new(a.births)), a.assembled, a.prepared)
+                    }
+                    None => {
+                        return Done {
+                            made: None,
+                            result: Ok(()),
+                            seconds: t.elapsed().as_secs_f64(),
+                            analysed,
+                        };
+                    }
+                },
+            };
+            let mut made = Made {
+                interval,
+                target,
+                prepared,
+                assembled: Some(assembled),
+            };
             let result = match &mut made.target {
                 Target::Solver(solver) => solver.factorize(&made.prepared.m),
                 Target::Born(births) => births.sys.solver.factorize(&made.prepared.m),
                 Target::Adopted => unreachable!("a job factorises into its own target"),
             };
             Done {
-                seconds: t.elapsed().as_secs_f64(),
+                made: Some(made),
                 result,
-                made,
+                seconds: t.elapsed().as_secs_f64(),
+                analysed,
             }
         })
     }
@@ -320,10 +395,10 @@ impl FactorAhead {
         let done = handle
             .join()
             .unwrap_or_else(|p| std::panic::resume_unwind(p));
-        let flops = match &done.made.target {
-            Target::Solver(s) => s.factor_flops(),
-            Target::Born(b) => b.sys.solver.factor_flops(),
-            Target::Adopted => 0.0,
+        let flops = match done.made.as_ref().map(|m| &m.target) {
+            Some(Target::Solver(s)) => s.factor_flops(),
+            Some(Target::Born(b)) => b.sys.solver.factor_flops(),
+            _ => 0.0,
         };
         self.finish(done, t.elapsed().as_secs_f64())
             .then_some(flops)
@@ -444,21 +519,18 @@ impl FactorAhead {
     /// or into the spare solver on `live` (a fork of its solver when no
     /// spare fits).
     pub fn job(&mut self, order: Order, live: &LiveSystem) -> Result<Job, SolveError> {
-        let target = match order.births {
-            Some(births) => Target::Born(births),
-            None => Target::Solver(match self.spare.take() {
+        let solver = match order.work {
+            Work::Births(_) => None,
+            Work::Made { .. } => Some(match self.spare.take() {
                 Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
                 _ => live.solver.fork()?,
             }),
         };
         Ok(Job {
-            made: Made {
-                interval: order.interval,
-                target,
-                prepared: order.prepared,
-                states: order.states,
-                assembled: Some(order.assembled),
-            },
+            interval: order.interval,
+            states: order.states,
+            work: order.work,
+            solver,
         })
     }
 
@@ -472,23 +544,36 @@ impl FactorAhead {
     /// the step waited for it. Whether it was made.
     fn finish(&mut self, done: Done, waited: f64) -> bool {
         self.stats.seconds += done.seconds;
+        self.stats.seconds_analysed += done.analysed;
         self.stats.seconds_waited += waited;
+        let Some(made) = done.made else {
+            self.stats.failed += 1;
+            return false;
+        };
         match done.result {
             Ok(()) => {
                 self.stats.made += 1;
-                if matches!(done.made.target, Target::Born(_)) {
+                if matches!(made.target, Target::Born(_)) {
                     self.stats.on_new_systems += 1;
                 }
-                self.ready = Some(done.made);
+                self.ready = Some(made);
                 true
             }
             Err(_) => {
                 self.stats.failed += 1;
-                if let Target::Solver(s) = done.made.target {
+                if let Target::Solver(s) = made.target {
                     self.spare = Some(s);
                 }
                 false
             }
+        }
+    }
+
+    /// The next step's own live system made ahead and not adopted yet.
+    pub fn born(&self) -> Option<&LiveSystem> {
+        match &self.ready.as_ref()?.target {
+            Target::Born(births) => Some(&births.sys),
+            _ => None,
         }
     }
 }

@@ -36,6 +36,8 @@
 
 pub mod ahead;
 pub mod contact_step;
+mod error;
+mod frame;
 pub mod grout_stops;
 pub mod joints;
 pub mod live;
@@ -45,8 +47,7 @@ pub mod rock_ties;
 pub mod settings;
 pub mod supports;
 
-pub use model::{
-    JointReading, MechError, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum,
-};
+pub use error::MechError;
+pub use model::{JointReading, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};
 pub use supports::SupportError;

@@ -7,25 +7,25 @@ use std::time::Instant;
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
-use crate::fem::elasticity::{self, Mat24, SolidGauss};
+use crate::fem::elasticity;
 use crate::fem::hex8::FACES;
-use crate::fem::hex8_modes::{self, Modes};
-use crate::fem::{CapacitanceStats, ElementError, SolveError, SparseSym};
+use crate::fem::{CapacitanceStats, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
-use crate::material::{AgeStepError, CreepLaw, Poisson};
-use crate::mesh::{Mesh, Part, SurfaceKind, ZoneSite};
-use crate::scene::{OrderingKind, SolidElement};
+use crate::material::{CreepLaw, Poisson};
+use crate::mesh::{Mesh, SurfaceKind, ZoneSite};
+use crate::scene::OrderingKind;
 use crate::vocab::JointState;
 
-use super::ahead::{AheadStats, Assembled, Births, FactorAhead, FactorGuess, NextStep, Order};
-use super::contact_step::{
-    self, JointSolveSettings, JointStepError, Prepared, RefactorCounts, StepSystem,
+use super::ahead::{
+    AheadStats, Analysed, Assembled, Births, BuildBirths, FactorAhead, FactorGuess, NextStep, Order,
 };
+use super::contact_step::{self, JointSolveSettings, Prepared, RefactorCounts, StepSystem};
+pub use super::error::MechError;
+use super::error::RESIDUAL_TOLERANCE;
+use super::frame::{ElementTables, Frame};
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::live::{
-    ConstructionOrdering, ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan, NONE,
-};
+use super::live::{ConstructionOrdering, LiveError, LiveSystem, OrderingPlan, NONE};
 use super::rock_condensation::{CondensedRock, RockElements};
 use super::rock_ties::RockTies;
 use super::settings::{JointMechanics, MechanicsSettings};
@@ -34,47 +34,6 @@ use super::settings::{JointMechanics, MechanicsSettings};
 pub const GRAVITY: f64 = 9.81;
 /// Water density [kg/m³].
 pub const WATER_DENSITY: f64 = 1000.0;
-/// Relative residual above which a mechanical solve is rejected.
-const RESIDUAL_TOLERANCE: f64 = 1e-8;
-
-#[derive(Debug, thiserror::Error)]
-pub enum MechError {
-    #[error("mechanical solve on day {day:.3}: {source}")]
-    Solve { day: f64, source: SolveError },
-    #[error("mechanical solve on day {day:.3}: relative residual {residual:.3e} exceeds {RESIDUAL_TOLERANCE:.0e}")]
-    Residual { day: f64, residual: f64 },
-    #[error("element {element}: {source}")]
-    Element {
-        element: usize,
-        source: ElementError,
-    },
-    #[error("element {element} on day {day:.3}: {source}")]
-    Age {
-        element: usize,
-        day: f64,
-        source: AgeStepError,
-    },
-    #[error("the mesh has rock elements but the mechanical settings have no rock (the scene's [rock] table)")]
-    NoRock,
-    #[error("mechanical settings: {0}")]
-    Settings(#[from] crate::vocab::Invalid),
-    #[error("joint contact on day {day:.3}: {source}")]
-    Contact {
-        day: f64,
-        source: crate::joint::ContactError,
-    },
-    #[error("prescribed displacement on node {node} component {comp}: the dof is not supported, or is on side b of a joint, or is tied to its rock grid line (solver.rock_coarsening)")]
-    NotSupported { node: u32, comp: u8 },
-    #[error("condensing the rock: {0}")]
-    Condensation(SolveError),
-    #[error("joints on day {day:.3}: {source}")]
-    Joints { day: f64, source: JointStepError },
-    #[error("mechanical unknowns on day {day:.3}: {source}")]
-    Live { day: f64, source: LiveError },
-    #[error(transparent)]
-    Supports(#[from] super::supports::SupportError),
-}
-
 /// Prescribed zero displacement increments: (node, component 0..3).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Supports {
@@ -223,6 +182,19 @@ impl MechStats {
         self.seconds_numeric += seconds;
     }
 
+    /// Counts the analysis of the live system `sys`.
+    fn count_live(&mut self, sys: &LiveSystem) {
+        self.symbolic += 1;
+        self.metis_calls += sys.ordering.metis_calls;
+        self.seconds_ordering += sys.ordering.seconds;
+        self.seconds_analysis += sys.solver.stats().symbolic_seconds;
+        self.live_sets_factor_nnz += sys.solver.factor_nnz() as u64;
+        self.live_sets_factor_flops += sys.solver.factor_flops();
+        self.max_dofs = self.max_dofs.max(sys.n_all());
+        let free = sys.supported.iter().filter(|&&s| !s).count();
+        self.max_free_dofs = self.max_free_dofs.max(free);
+    }
+
     /// A warning line when a contact step ended with joint points held
     /// closed in tension at the flip limit (`contact_step::MAX_FLIPS`): the
     /// apertures beside them are not an equilibrium answer. Empty otherwise.
@@ -268,46 +240,21 @@ pub struct MechState {
     pub next_factor_guess: Option<FactorGuess>,
 }
 
-impl MechError {
-    /// The unknown (in the live system's numbering) whose pivot failed.
-    pub fn pivot_dof(&self) -> Option<usize> {
-        match self {
-            MechError::Solve { source, .. } => source.pivot_dof(),
-            MechError::Joints {
-                source: JointStepError::Solve(e),
-                ..
-            } => e.pivot_dof(),
-            MechError::Live {
-                source: super::live::LiveError::Solve(e),
-                ..
-            } => e.pivot_dof(),
-            _ => None,
-        }
-    }
-}
-
 /// The staged mechanical model.
 pub struct MechanicsModel {
-    tables: ElementTables,
+    /// what a run never changes, shared with the thread working ahead
+    frame: Arc<Frame>,
     settings: MechanicsSettings,
-    /// the law of an element that does not creep (rock, or no `creep` effect)
-    no_creep: CreepLaw,
     node_xyz: Vec<[f64; 3]>,
-    elements: Vec<[u32; 8]>,
     thermal_dof: Vec<u32>,
     lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
-    supported: Vec<bool>,
     /// displacement increments of supported dofs for the next step (global dof, value)
     prescribed: Vec<(u32, f64)>,
     wet_faces: Vec<(u32, u8)>,
     /// the system of the live set at the last rebuild (empty before the first step)
     sys: LiveSystem,
-    /// how each live set's elimination order is chosen
-    ordering: OrderingPlan,
     /// the live set has changed since `sys` was built
     dirty: bool,
-    /// contact points of the joints (the `joints` effect)
-    pub points: Vec<JointPoint>,
     joint_settings: JointSolveSettings,
     /// joint point of each side-a node
     point_of_a: HashMap<u32, u32>,
@@ -320,77 +267,6 @@ pub struct MechanicsModel {
     /// a restored state's [`MechState::next_factor_guess`], for the first
     /// step after the restore
     restored_guess: Option<FactorGuess>,
-    /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
-    ties: RockTies,
-    /// the rock condensed once per run (`solver.condense_rock`)
-    rock: Option<Arc<CondensedRock>>,
-}
-
-/// Per-element constants of the mechanical problem, computed once.
-struct ElementTables {
-    /// Gauss points of each element
-    gauss: Vec<[SolidGauss; 8]>,
-    /// stiffness at unit modulus (the modulus ages, ν does not); with the
-    /// incompatible modes, the condensed one
-    k_unit: Vec<Mat24>,
-    /// the incompatible modes of each element (`solver.element =
-    /// "hex8_incompatible"`; empty with the plain hex8)
-    modes: Vec<Modes>,
-    /// Poisson's ratio
-    nu: Vec<f64>,
-    /// thermal expansion [1/°C], zero without the `thermal_strain` effect
-    alpha: Vec<f64>,
-    /// density [kg/m³]
-    density: Vec<f64>,
-    /// concrete (ageing, creeping) or rock (elastic)
-    concrete: Vec<bool>,
-    /// the rock's modulus (0 without rock elements) [Pa]
-    rock_modulus: f64,
-}
-
-impl ElementTables {
-    fn new(mesh: &Mesh, settings: &MechanicsSettings) -> Result<ElementTables, MechError> {
-        let c = &settings.concrete;
-        let n_el = mesh.elements.len();
-        let mut t = ElementTables {
-            gauss: Vec::with_capacity(n_el),
-            k_unit: Vec::with_capacity(n_el),
-            modes: vec![],
-            nu: vec![],
-            alpha: vec![],
-            density: vec![],
-            concrete: vec![],
-            rock_modulus: 0.0,
-        };
-        for (e, part) in mesh.parts.iter().enumerate() {
-            let coords = mesh.element_coords(e);
-            let g = elasticity::gauss_points(&coords)
-                .map_err(|source| MechError::Element { element: e, source })?;
-            let (n, a, rho, is_c) = match part {
-                Part::Concrete { .. } => (c.poisson, c.expansion_per_c, c.density_kg_m3, true),
-                Part::Rock => {
-                    let r = settings.rock.as_ref().ok_or(MechError::NoRock)?;
-                    t.rock_modulus = r.modulus_pa;
-                    (r.poisson, r.expansion_per_c, r.density_kg_m3, false)
-                }
-            };
-            let q = elasticity::poisson_matrix(n);
-            if settings.element == SolidElement::Hex8Incompatible {
-                let (k, m) = hex8_modes::modes(&coords, &g, &q)
-                    .map_err(|source| MechError::Element { element: e, source })?;
-                t.k_unit.push(k);
-                t.modes.push(m);
-            } else {
-                t.k_unit.push(elasticity::stiffness(&g, &q));
-            }
-            t.gauss.push(g);
-            t.nu.push(n);
-            t.alpha.push(if settings.thermal_strain { a } else { 0.0 });
-            t.density.push(rho);
-            t.concrete.push(is_c);
-        }
-        Ok(t)
-    }
 }
 
 impl MechState {
@@ -465,6 +341,11 @@ impl MechanicsModel {
             .map(|&(g, _)| (g / 3, (g % 3) as u8))
     }
 
+    /// The contact points of the joints (the `joints` effect).
+    pub fn points(&self) -> &[JointPoint] {
+        &self.frame.points
+    }
+
     /// Builds the model; rock elements are born (stress-free) at day 0.
     pub fn new(
         mesh: &Mesh,
@@ -520,14 +401,10 @@ impl MechanicsModel {
         let state =
             MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
         Ok(MechanicsModel {
-            tables,
             settings: settings.clone(),
-            no_creep: CreepLaw { terms: Vec::new() },
             node_xyz: mesh.nodes.clone(),
-            elements: mesh.elements.clone(),
             thermal_dof: mesh.thermal_dof.clone(),
             lift_elems: mesh.lift_elements(),
-            supported,
             prescribed: Vec::new(),
             wet_faces: mesh
                 .surfaces
@@ -536,7 +413,6 @@ impl MechanicsModel {
                 .map(|s| (s.elem, s.face))
                 .collect(),
             sys,
-            ordering,
             dirty: true,
             joint_settings: joint_solve_settings(mesh, &settings.joint),
             point_of_a: points
@@ -547,11 +423,20 @@ impl MechanicsModel {
             zone_stop_samples: inside_grout_stops(mesh, &points, settings.joint.grout_stop_inset_m),
             state,
             stats,
-            points,
             ahead: FactorAhead::new(factor_ahead(settings)),
             restored_guess: None,
-            ties,
-            rock: rock.map(|(r, _)| Arc::new(r)),
+            frame: Arc::new(Frame {
+                tables,
+                concrete: settings.concrete.clone(),
+                no_creep: CreepLaw { terms: Vec::new() },
+                elements: mesh.elements.clone(),
+                n_nodes: mesh.nodes.len(),
+                points,
+                supported,
+                ties,
+                ordering,
+                rock: rock.map(|(r, _)| Arc::new(r)),
+            }),
         })
     }
 
@@ -579,6 +464,9 @@ impl MechanicsModel {
     fn settle_ahead(&mut self) {
         if let Some(flops) = self.ahead.settle() {
             self.stats.count_numeric(1, flops, 0.0);
+            if let Some(sys) = self.ahead.born() {
+                self.stats.count_live(sys);
+            }
         }
         self.stats.ahead = self.ahead.stats;
     }
@@ -625,12 +513,13 @@ impl MechanicsModel {
     /// when the elements `live` are.
     fn pair_live(&self, live: &[bool]) -> Vec<bool> {
         let mut node_live = vec![false; self.node_xyz.len()];
-        for (e, conn) in self.elements.iter().enumerate() {
+        for (e, conn) in self.frame.elements.iter().enumerate() {
             if live[e] {
                 conn.iter().for_each(|&k| node_live[k as usize] = true);
             }
         }
-        self.points
+        self.frame
+            .points
             .iter()
             .map(|p| node_live[p.a as usize] && node_live[p.b as usize])
             .collect()
@@ -665,95 +554,17 @@ impl MechanicsModel {
     /// Numbers and analyses the live system of the elements `live`, counted.
     fn build_live(&mut self, live: &[bool], pair_live: &[bool]) -> Result<LiveSystem, LiveError> {
         let t = Instant::now();
-        let elements = ElementSet {
-            conn: &self.elements,
-            live,
-            k_unit: &self.tables.k_unit,
-            ties: &self.ties,
-            rock: self.rock.as_ref(),
-        };
-        let mut sys = LiveSystem::build(
-            elements,
-            &self.points,
-            pair_live,
-            &self.supported,
-            self.node_xyz.len(),
-            &self.ordering,
-        )?;
-        self.stats.symbolic += 1;
-        self.stats.metis_calls += sys.ordering.metis_calls;
-        self.stats.seconds_ordering += sys.ordering.seconds;
-        self.stats.seconds_analysis += sys.solver.stats().symbolic_seconds;
-        self.stats.live_sets_factor_nnz += sys.solver.factor_nnz() as u64;
-        self.stats.live_sets_factor_flops += sys.solver.factor_flops();
-        self.stats.max_dofs = self.stats.max_dofs.max(sys.n_all());
-        let free = sys.supported.iter().filter(|&&s| !s).count();
-        self.stats.max_free_dofs = self.stats.max_free_dofs.max(free);
-        sys.rock_matrix = self.rock_matrix(&sys);
+        let sys = self.frame.live_system(live, pair_live)?;
+        self.stats.count_live(&sys);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         Ok(sys)
-    }
-
-    /// The part of `sys`'s matrix no step changes: its rock elements (not
-    /// condensed) at the rock's modulus (the e_eff of a step's
-    /// coefficients: the rock neither ages nor creeps), and −C of the
-    /// condensed rock, in one slot per block after the elements. None
-    /// without rock.
-    fn rock_matrix(&self, sys: &LiveSystem) -> Option<SparseSym> {
-        let rock = |el: &&LiveElement| !self.tables.concrete[el.elem as usize];
-        if sys.rock.is_none() && !sys.elements.iter().any(|el| rock(&el)) {
-            return None;
-        }
-        let mut a = SparseSym::new(sys.pattern.clone());
-        for (slot, el) in sys.elements.iter().enumerate() {
-            if rock(&el) && !el.condensed {
-                self.add_stiffness(&mut a, slot, el, self.tables.rock_modulus);
-            }
-        }
-        for (t, block) in sys.rock.iter().flat_map(|r| r.blocks.iter()).enumerate() {
-            a.add_element(sys.elements.len() + t, &block.minus_c);
-        }
-        Some(a)
-    }
-
-    /// Adds `modulus` times the unit-modulus stiffness of the live element
-    /// `el` (slot `slot`) to `a`.
-    fn add_stiffness(&self, a: &mut SparseSym, slot: usize, el: &LiveElement, modulus: f64) {
-        match &el.k_unit {
-            Some(k) => a.add_element_scaled(slot, modulus, k),
-            None => a.add_element_scaled(slot, modulus, &self.tables.k_unit[el.elem as usize]),
-        }
-    }
-
-    /// The live system, guessed first states and K̃ of the next step, whose
-    /// start pours `next.pours`: None when the pours add no element.
-    fn births(&mut self, next: &NextStep) -> Result<Option<(Births, Assembled)>, MechError> {
-        let (t0, t1) = next.interval;
-        let mut live = self.state.live.clone();
-        let mut birth = self.state.birth_day.clone();
-        for key in &next.pours {
-            for &e in self.lift_elems.get(key).into_iter().flatten() {
-                live[e as usize] = true;
-                birth[e as usize] = t0;
-            }
-        }
-        if live == self.state.live {
-            return Ok(None);
-        }
-        let pair_live = self.pair_live(&live);
-        let paired = self.newly_paired(&pair_live);
-        let sys = self
-            .build_live(&live, &pair_live)
-            .map_err(|source| MechError::Live { day: t0, source })?;
-        let k = self.stiffness(&sys, &birth, t0, t1)?;
-        Ok(Some((Births { live, paired, sys }, k)))
     }
 
     /// Prescribes the displacement increment of a supported dof for the next
     /// step (a jack, a settlement; the supports are otherwise fixed).
     pub fn prescribe(&mut self, node: u32, comp: u8, increment: f64) -> Result<(), MechError> {
         let g = 3 * node as usize + comp as usize;
-        if comp > 2 || !self.supported.get(g).copied().unwrap_or(false) {
+        if comp > 2 || !self.frame.supported.get(g).copied().unwrap_or(false) {
             return Err(MechError::NotSupported { node, comp });
         }
         self.prescribed.push((g as u32, increment));
@@ -773,7 +584,7 @@ impl MechanicsModel {
             j.grout_modulus_pa,
         ];
         let mut n = 0;
-        for (p, pt) in self.points.iter().enumerate() {
+        for (p, pt) in self.frame.points.iter().enumerate() {
             let st = &mut self.state.joints[p];
             if pt.joint != joint || pt.zone != zone || !st.paired || st.grout.is_some() {
                 continue;
@@ -794,38 +605,11 @@ impl MechanicsModel {
         n
     }
 
-    /// The step coefficients of element `e`, born on `birth`, over (t0, t1).
-    fn coefficients(
-        &self,
-        e: usize,
-        birth: f64,
-        t0: f64,
-        t1: f64,
-    ) -> Result<StepCoefficients, MechError> {
-        let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
-        let res = if self.tables.concrete[e] {
-            let concrete = &self.settings.concrete;
-            creep::coefficients(
-                &concrete.modulus,
-                concrete.creep.as_ref().unwrap_or(&self.no_creep),
-                age0,
-                age1,
-            )
-        } else {
-            creep::coefficients(&self.tables.rock_modulus, &self.no_creep, age0, age1)
-        };
-        res.map_err(|source| MechError::Age {
-            element: e,
-            day: t1,
-            source,
-        })
-    }
-
     /// Temperature at each Gauss point of element `e` from thermal-dof temperatures.
     fn gauss_temperatures(&self, e: usize, temps: &[f64]) -> [f64; 8] {
-        let conn = &self.elements[e];
+        let conn = &self.frame.elements[e];
         std::array::from_fn(|g| {
-            let n = crate::fem::hex8::shape(self.tables.gauss[e][g].xi);
+            let n = crate::fem::hex8::shape(self.frame.tables.gauss[e][g].xi);
             (0..8)
                 .map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize])
                 .sum()
@@ -843,8 +627,9 @@ impl MechanicsModel {
                 continue;
             }
             let ids = FACES[face as usize];
-            let fc: [[f64; 3]; 4] =
-                std::array::from_fn(|k| self.node_xyz[self.elements[e as usize][ids[k]] as usize]);
+            let fc: [[f64; 3]; 4] = std::array::from_fn(|k| {
+                self.node_xyz[self.frame.elements[e as usize][ids[k]] as usize]
+            });
             if fc.iter().all(|p| p[2] >= level) {
                 continue;
             }
@@ -856,7 +641,7 @@ impl MechanicsModel {
                 source,
             })?;
             for k in 0..4 {
-                let node = self.elements[e as usize][ids[k]] as usize;
+                let node = self.frame.elements[e as usize][ids[k]] as usize;
                 for c in 0..3 {
                     f[3 * node + c] += load[3 * k + c];
                 }
@@ -911,7 +696,7 @@ impl MechanicsModel {
             mode_loads,
         } = self.assemble(k, temps);
         let (df_ext, water) = self.external_loads(water_level)?;
-        let ext = self.sys.reduce(&df_ext, &self.points);
+        let ext = self.sys.reduce(&df_ext, &self.frame.points);
         for (b, e) in b.iter_mut().zip(&ext) {
             *b += e;
         }
@@ -933,40 +718,6 @@ impl MechanicsModel {
         self.stats.steps += 1;
         self.stats.ahead = self.ahead.stats;
         Ok(())
-    }
-
-    /// The stiffness K̃ of the elements of `sys` born on `birth` over
-    /// (t0, t1), at their mid-step ages, with their coefficients (what
-    /// [`MechanicsModel::assemble`] makes when they are the live ones).
-    fn stiffness(
-        &self,
-        sys: &LiveSystem,
-        birth: &[f64],
-        t0: f64,
-        t1: f64,
-    ) -> Result<Assembled, MechError> {
-        let mut a = match &sys.rock_matrix {
-            Some(rock) => rock.clone(),
-            None => SparseSym::new(sys.pattern.clone()),
-        };
-        let rock_made = sys.rock_matrix.is_some();
-        let mut coeffs = Vec::with_capacity(sys.elements.len());
-        let mut born = Vec::with_capacity(sys.elements.len());
-        for (slot, el) in sys.elements.iter().enumerate() {
-            let e = el.elem as usize;
-            let c = self.coefficients(e, birth[e], t0, t1)?;
-            let constant = el.condensed || (rock_made && !self.tables.concrete[e]);
-            if !constant {
-                self.add_stiffness(&mut a, slot, el, c.e_eff);
-            }
-            coeffs.push(c);
-            born.push(birth[e]);
-        }
-        Ok(Assembled {
-            stiffness: a,
-            coeffs,
-            born,
-        })
     }
 
     /// This step's factor made ahead, if any (after a restore: made now
@@ -1012,23 +763,58 @@ impl MechanicsModel {
     fn order_next(&mut self) -> Option<Order> {
         let next = self.ahead.due(&self.sys)?;
         let t_asm = Instant::now();
-        let symbolic_before = self.stats.seconds_symbolic;
         let (t0, t1) = next.interval;
-        let made = if next.pours.is_empty() {
-            self.stiffness(&self.sys, &self.state.birth_day, t0, t1)
+        let order = if next.pours.is_empty() {
+            let (sys, birth) = (&self.sys, &self.state.birth_day);
+            self.frame
+                .stiffness(sys, birth, t0, t1)
                 .ok()
-                .map(|k| (k, None))
+                .map(|k| Order::new(next.interval, k, sys, &self.state.joints))
         } else {
-            match self.births(&next) {
-                Ok(Some((births, k))) => Some((k, Some(births))),
-                _ => None,
-            }
+            self.births(&next)
         };
-        let order = made
-            .map(|(k, births)| Order::new(next.interval, k, births, &self.sys, &self.state.joints));
-        let symbolic = self.stats.seconds_symbolic - symbolic_before;
-        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64() - symbolic;
+        self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
         order
+    }
+
+    /// The order of the next step, whose start pours `next.pours`: its live
+    /// system, K̃ and first pass's matrix are made in the job, from this
+    /// step's start states and the new pairs as a rebuild starts them.
+    /// None when the pours add no element.
+    fn births(&self, next: &NextStep) -> Option<Order> {
+        let (t0, t1) = next.interval;
+        let mut live = self.state.live.clone();
+        let mut birth = self.state.birth_day.clone();
+        for key in &next.pours {
+            for &e in self.lift_elems.get(key).into_iter().flatten() {
+                live[e as usize] = true;
+                birth[e as usize] = t0;
+            }
+        }
+        if live == self.state.live {
+            return None;
+        }
+        let pair_live = self.pair_live(&live);
+        let paired = self.newly_paired(&pair_live);
+        let mut states = self.state.joints.clone();
+        for &(p, st) in &paired {
+            states[p] = st;
+        }
+        let frame = Arc::clone(&self.frame);
+        let guess = states.clone();
+        let build: BuildBirths = std::thread::spawn(move || {
+            let t = Instant::now();
+            let sys = frame.live_system(&live, &pair_live).ok()?;
+            let assembled = frame.stiffness(&sys, &birth, t0, t1).ok()?;
+            let prepared = Prepared::first_pass(&assembled.stiffness, &sys, &guess);
+            Some(Analysed {
+                births: Births { live, paired, sys },
+                assembled,
+                prepared,
+                seconds: t.elapsed().as_secs_f64(),
+            })
+        });
+        Some(Order::births(next.interval, states, build))
     }
 
     /// After a restore, the first step's factor as the run that wrote the
@@ -1064,7 +850,7 @@ impl MechanicsModel {
         let (sys, birth) = (&self.sys, &self.state.birth_day);
         match self.ahead.assembled(t0, t1, sys, birth) {
             Some(made) => Ok(made),
-            None => self.stiffness(sys, birth, t0, t1),
+            None => self.frame.stiffness(sys, birth, t0, t1),
         }
     }
 
@@ -1085,21 +871,22 @@ impl MechanicsModel {
             let c = &coeffs[slot];
             let eps = self.imposed_strain(e, c, temps);
             let imposed = eps.iter().any(|g| g.iter().any(|&v| v != 0.0));
-            let modes = self.tables.modes.get(e);
+            let modes = self.frame.tables.modes.get(e);
             let f_alpha = match modes {
                 Some(m) if imposed => {
-                    let q = elasticity::poisson_matrix(self.tables.nu[e]);
-                    m.mode_load(&self.tables.gauss[e], &q, &eps)
+                    let q = elasticity::poisson_matrix(self.frame.tables.nu[e]);
+                    m.mode_load(&self.frame.tables.gauss[e], &q, &eps)
                 }
                 _ => SVector::zeros(),
             };
             if imposed {
-                let d = elasticity::isotropic_d(c.e_eff, self.tables.nu[e]);
-                let mut load = elasticity::initial_strain_load(&self.tables.gauss[e], &d, &eps);
+                let d = elasticity::isotropic_d(c.e_eff, self.frame.tables.nu[e]);
+                let mut load =
+                    elasticity::initial_strain_load(&self.frame.tables.gauss[e], &d, &eps);
                 if let Some(m) = modes {
                     load = m.condense_load(&load, &(f_alpha * c.e_eff));
                 }
-                sys.add_element_vector(slot, &load, &self.points, &mut b);
+                sys.add_element_vector(slot, &load, &self.frame.points, &mut b);
             }
             if modes.is_some() {
                 mode_loads.push(f_alpha);
@@ -1124,14 +911,14 @@ impl MechanicsModel {
         temps: Option<(&[f64], &[f64])>,
     ) -> [[f64; 6]; 8] {
         let mut eps = [[0.0; 6]; 8];
-        if !self.state.creep.is_empty() && self.tables.concrete[e] {
+        if !self.state.creep.is_empty() && self.frame.tables.concrete[e] {
             for (g, eg) in eps.iter_mut().enumerate() {
                 *eg = creep::eta(&self.state.creep[8 * e + g], c);
             }
         }
         let mut volumetric = [0.0; 8];
         if let (true, Some((before, after))) = (
-            self.settings.thermal_strain && self.tables.alpha[e] != 0.0,
+            self.settings.thermal_strain && self.frame.tables.alpha[e] != 0.0,
             temps,
         ) {
             let (t_a, t_b) = (
@@ -1139,10 +926,13 @@ impl MechanicsModel {
                 self.gauss_temperatures(e, after),
             );
             for g in 0..8 {
-                volumetric[g] += self.tables.alpha[e] * (t_b[g] - t_a[g]);
+                volumetric[g] += self.frame.tables.alpha[e] * (t_b[g] - t_a[g]);
             }
         }
-        if let (Some(law), true) = (&self.settings.concrete.autogenous, self.tables.concrete[e]) {
+        if let (Some(law), true) = (
+            &self.settings.concrete.autogenous,
+            self.frame.tables.concrete[e],
+        ) {
             let dg = law.increment(c.age0, c.age1);
             volumetric.iter_mut().for_each(|v| *v += dg);
         }
@@ -1164,10 +954,10 @@ impl MechanicsModel {
                 let e = el.elem as usize;
                 if !self.state.weight_applied[e] {
                     let w = elasticity::body_force_at(
-                        &self.tables.gauss[e],
-                        [0.0, 0.0, -self.tables.density[e] * GRAVITY],
+                        &self.frame.tables.gauss[e],
+                        [0.0, 0.0, -self.frame.tables.density[e] * GRAVITY],
                     );
-                    let gd = elasticity::element_dofs(&self.elements[e]);
+                    let gd = elasticity::element_dofs(&self.frame.elements[e]);
                     for k in 0..24 {
                         df_ext[gd[k] as usize] += w[k];
                     }
@@ -1265,7 +1055,7 @@ impl MechanicsModel {
             a,
             b,
             prescribed,
-            points: &self.points,
+            points: &self.frame.points,
             day,
         };
         let out = contact_step::solve(
@@ -1301,24 +1091,28 @@ impl MechanicsModel {
         water: Vec<f64>,
     ) {
         let mut du = vec![0.0; self.state.u.len()];
-        self.sys.expand(x, &self.points, &mut du);
+        self.sys.expand(x, &self.frame.points, &mut du);
         // du is zero off the live nodes.
         for (u, d) in self.state.u.iter_mut().zip(&du) {
             *u += d;
         }
         for (slot, el) in self.sys.elements.iter().enumerate() {
             let e = el.elem as usize;
-            let gd = elasticity::element_dofs(&self.elements[e]);
+            let gd = elasticity::element_dofs(&self.frame.elements[e]);
             let ue: [f64; 24] = std::array::from_fn(|k| du[gd[k] as usize]);
             let c = &coeffs[slot];
-            let nu = Poisson(self.tables.nu[e]);
+            let nu = Poisson(self.frame.tables.nu[e]);
             // the incompatible modes' amplitudes (E cancels: loads at E = 1)
             let modes = self
+                .frame
                 .tables
                 .modes
                 .get(e)
                 .map(|m| (m, m.amplitudes(&ue, &mode_loads[slot])));
-            for (g, (gauss, imposed)) in self.tables.gauss[e].iter().zip(&pseudo[slot]).enumerate()
+            for (g, (gauss, imposed)) in self.frame.tables.gauss[e]
+                .iter()
+                .zip(&pseudo[slot])
+                .enumerate()
             {
                 let mut deps = elasticity::strain(gauss, &ue);
                 if let Some((m, alpha)) = &modes {
@@ -1331,7 +1125,7 @@ impl MechanicsModel {
                 for (s, d) in self.state.stress[e][g].iter_mut().zip(ds) {
                     *s += d;
                 }
-                if !self.state.creep.is_empty() && self.tables.concrete[e] {
+                if !self.state.creep.is_empty() && self.frame.tables.concrete[e] {
                     creep::commit(&mut self.state.creep[8 * e + g], c, nu, &ds);
                 }
             }
@@ -1344,7 +1138,7 @@ impl MechanicsModel {
         }
         self.state.water_load = water;
         self.state.f_contact.iter_mut().for_each(|f| *f = 0.0);
-        for (p, pt) in self.points.iter().enumerate() {
+        for (p, pt) in self.frame.points.iter().enumerate() {
             let st = &self.state.joints[p];
             if !st.paired {
                 continue;
@@ -1411,8 +1205,8 @@ impl MechanicsModel {
         let mut scale = 0.0f64;
         for el in &sys.elements {
             let e = el.elem as usize;
-            let f = elasticity::internal_force(&self.tables.gauss[e], &self.state.stress[e]);
-            let gd = elasticity::element_dofs(&self.elements[e]);
+            let f = elasticity::internal_force(&self.frame.tables.gauss[e], &self.state.stress[e]);
+            let gd = elasticity::element_dofs(&self.frame.elements[e]);
             for k in 0..24 {
                 fint[gd[k] as usize] += f[k];
                 live[gd[k] as usize] = true;
@@ -1424,13 +1218,13 @@ impl MechanicsModel {
         for d in (0..fint.len()).filter(|&d| live[d]) {
             let f = self.state.f_ext[d] + self.state.f_contact[d];
             r[d] = fint[d] - f;
-            if !self.supported[d] {
+            if !self.frame.supported[d] {
                 f2 += f * f;
             }
         }
         // a tied node is in equilibrium only with its masters (Tᵀ r = 0)
         sys.fold_tied(&mut r);
-        for d in (0..fint.len()).filter(|&d| live[d] && !self.supported[d]) {
+        for d in (0..fint.len()).filter(|&d| live[d] && !self.frame.supported[d]) {
             r2 += r[d] * r[d];
         }
         (r2.sqrt(), f2.sqrt().max(scale).max(f64::MIN_POSITIVE))
@@ -1474,7 +1268,7 @@ impl MechanicsModel {
     /// its tributary area; exact for a uniform traction on the bilinear
     /// joint faces.
     pub fn joint_pressure(&self, p: usize) -> f64 {
-        self.state.joints[p].force[2] / self.points[p].area
+        self.state.joints[p].force[2] / self.frame.points[p].area
     }
 
     /// The zone's smallest aperture inside its grout stops: the minimum of
@@ -1512,7 +1306,7 @@ impl MechanicsModel {
         let pressure = (0..used)
             .map(|k| s.weights[k] * self.joint_pressure(s.points[k] as usize))
             .sum();
-        let node = |k: usize| self.points[s.points[k] as usize].a;
+        let node = |k: usize| self.frame.points[s.points[k] as usize].a;
         Some(ZoneMinimum {
             reading: JointReading {
                 aperture,

@@ -234,7 +234,7 @@ impl<'a> Simulation<'a> {
             rows: Vec::new(),
         };
         let joint_records = JointRecords {
-            columns: if mechanics.as_ref().is_some_and(|m| !m.points.is_empty()) {
+            columns: if mechanics.as_ref().is_some_and(|m| !m.points().is_empty()) {
                 joint_columns(mesh)
             } else {
                 Vec::new()

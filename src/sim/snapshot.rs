@@ -86,13 +86,13 @@ impl Simulation<'_> {
                 })
                 .collect();
             cell_fields.push(("von_mises_mpa".into(), vm));
-            if !m.points.is_empty() {
+            if !m.points().is_empty() {
                 // On both nodes of each joint pair: aperture [mm], normal
                 // pressure [MPa] and a state code; NaN off the joints.
                 let n = mesh.nodes.len();
                 let (mut aperture, mut pressure, mut code) =
                     (vec![f64::NAN; n], vec![f64::NAN; n], vec![f64::NAN; n]);
-                for (p, pt) in m.points.iter().enumerate() {
+                for (p, pt) in m.points().iter().enumerate() {
                     let st = &m.state.joints[p];
                     if !st.paired {
                         continue;

@@ -422,8 +422,16 @@ fn print_mechanics(m: &MechStats) {
     );
     let a = &m.ahead;
     println!(
-        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} on a live set analysed ahead), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
-        "", a.made, a.seconds, a.on_new_systems, a.used, a.discarded, a.failed, a.seconds_waited
+        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} on a live set analysed ahead, {:.2} s of it analysing), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
+        "",
+        a.made,
+        a.seconds,
+        a.on_new_systems,
+        a.seconds_analysed,
+        a.used,
+        a.discarded,
+        a.failed,
+        a.seconds_waited
     );
 }
 

@@ -111,7 +111,7 @@ fn contact_summary(m: &MechanicsModel, h: &Health) -> String {
     format!(
         "{} joint points ({} open, {} closed), {} contact passes, {} factorisations, \
          kept-closed tension {:.1e} Pa, residual {:.1e}, complementarity {:.1e} / {:.1e}",
-        m.points.len(),
+        m.points().len(),
         h.open,
         h.closed,
         m.stats.contact_iterations,
@@ -506,8 +506,12 @@ fn run_staged(sc: &Scene, mesh: &Mesh, sch: &Schedules, end: i64, keep: &[i64]) 
     }
     let m = sim.mechanics.as_ref().unwrap();
     (out.switches, out.reversed) = reversals(&history);
-    out.zones = m.points.iter().map(|p| (p.joint, p.zone)).collect();
-    out.pos = m.points.iter().map(|p| mesh.nodes[p.a as usize]).collect();
+    out.zones = m.points().iter().map(|p| (p.joint, p.zone)).collect();
+    out.pos = m
+        .points()
+        .iter()
+        .map(|p| mesh.nodes[p.a as usize])
+        .collect();
     out.last = m.state.joints.clone();
     out.rows = sim.joint_records.rows.clone();
     out.seconds = t.elapsed().as_secs_f64();
@@ -774,7 +778,7 @@ fn a_stiffness_contrast_of_1e6_between_rock_and_concrete_both_ways() {
         h.assert_stable(&format!("blocks on rock E {e_rock:e}"));
         // apertures keyed by the position of node a
         let apertures: BTreeMap<[i64; 3], f64> = m
-            .points
+            .points()
             .iter()
             .zip(&m.state.joints)
             .filter(|(_, s)| s.paired)
@@ -1050,7 +1054,7 @@ fn a_joint_opening_and_closing_every_season_for_five_years() {
         worst_s = worst_s.max((lo - sigma).abs().max((hi - sigma).abs()) / (E * ALPHA * 8.0));
     }
     let (fe_switches, reversed) = reversals(&history);
-    let n_points = m.points.len();
+    let n_points = m.points().len();
     eprintln!(
         "five years of seasons: {switches} switches (recursion), {fe_switches} point switches over {n_points} points, \
          {reversed} reversals, ≤ {max_passes} passes/step, aperture error {worst_a:.1e}, σ error {worst_s:.1e}, \
@@ -1222,12 +1226,12 @@ fn long_thin_elements_in_the_rock_and_in_a_lift() {
     eprintln!(
         "aspect 50 lift between walls: {} joint points, cooled aperture error {worst_gap:.1e}, stress {worst_stress:.1e} of EαΔT; \
          heated σ error {err:.1e}, {} closed; residuals {:.1e} / {:.1e}",
-        m.points.len(),
+        m.points().len(),
         h2.closed,
         h.residual,
         h2.residual
     );
-    assert_eq!(m.points.len(), 22);
+    assert_eq!(m.points().len(), 22);
     assert_eq!(h.open, 22);
     assert_eq!(h2.closed, 22);
     assert!(worst_gap < 1e-9, "aperture off by {worst_gap:.2e}");
@@ -1282,7 +1286,7 @@ fn a_zone_grouted_at_exactly_zero_aperture() {
         }
         let forces: Vec<[f64; 3]> = m.state.joints.iter().map(|s| s.force).collect();
         let n = m.grout(1, 1, 2.0);
-        assert_eq!(n, m.points.len());
+        assert_eq!(n, m.points().len());
         for (s, f) in m.state.joints.iter().zip(&forces) {
             let g = s.grout.unwrap();
             assert!(g.aperture == 0.0 || contact == ContactSolverKind::Qp && g.aperture < 1e-15);

@@ -130,7 +130,7 @@ fn joint_totals(m: &MechanicsModel) -> JointTotals {
         stick: 0,
         slip: 0,
     };
-    for (pt, st) in m.points.iter().zip(&m.state.joints) {
+    for (pt, st) in m.points().iter().zip(&m.state.joints) {
         let g = pt.frame.to_global(st.force);
         t.local = std::array::from_fn(|k| t.local[k] + st.force[k]);
         t.global = std::array::from_fn(|k| t.global[k] + g[k]);
@@ -194,8 +194,8 @@ fn slide(solver: ContactSolverKind, mu_s: f64, mu_k: f64, ratios: &[f64]) -> Vec
     }
     let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
-    assert_eq!(m.points.len(), 9, "3 × 3 joint points");
-    for p in &m.points {
+    assert_eq!(m.points().len(), 9, "3 × 3 joint points");
+    for p in m.points() {
         assert_eq!(
             (p.frame.t1, p.frame.t2, p.frame.n),
             ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
@@ -226,7 +226,7 @@ fn slide(solver: ContactSolverKind, mu_s: f64, mu_k: f64, ratios: &[f64]) -> Vec
             ratio,
             joint: joint_totals(&m),
             points: m
-                .points
+                .points()
                 .iter()
                 .zip(&m.state.joints)
                 .map(|(p, st)| (st.force, st.state, p.area, mesh.nodes[p.a as usize][1]))
@@ -437,8 +437,8 @@ fn incline(solver: ContactSolverKind, hold: HoldY, push: &[f64]) -> (Vec<Incline
     }
     let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
     let mut m = MechanicsModel::new(&mesh, &mechanics, &Supports { fixed }).unwrap();
-    assert_eq!(m.points.len(), 12, "3 × 4 joint points");
-    for p in &m.points {
+    assert_eq!(m.points().len(), 12, "3 × 4 joint points");
+    for p in m.points() {
         let f = &p.frame;
         let want = [[0.0, -1.0, 0.0], [c, 0.0, s], [-s, 0.0, c]];
         for (axis, w) in [f.t1, f.t2, f.n].iter().zip(&want) {

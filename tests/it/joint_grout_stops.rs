@@ -67,7 +67,7 @@ fn opened(across: u32, inset: Option<f64>) -> Vec<(f64, JointState)> {
         }
     }
     m.step(1.0, 2.0, Some((&t, &t)), None).unwrap();
-    for (p, st) in m.points.iter().zip(&m.state.joints) {
+    for (p, st) in m.points().iter().zip(&m.state.joints) {
         let y = mesh.nodes[p.a as usize][1];
         assert_rel(st.aperture(), G0 + G1 * y, 1e-9, "the prescribed field");
     }

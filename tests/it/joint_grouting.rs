@@ -56,9 +56,13 @@ fn grouted(contact: ContactSolverKind) -> (MechanicsModel, Mesh) {
     m.pour(2, 1, 0.0);
     let t = vec![20.0; mesh.n_thermal_dofs];
     m.step(0.0, 1.0, Some((&t, &t)), None).unwrap();
-    let (joint, zone) = (m.points[0].joint, m.points[0].zone);
+    let (joint, zone) = (m.points()[0].joint, m.points()[0].zone);
     let n = m.grout(joint, zone, 1.0);
-    assert_eq!(n, m.points.len(), "every point of the one zone is grouted");
+    assert_eq!(
+        n,
+        m.points().len(),
+        "every point of the one zone is grouted"
+    );
     (m, mesh)
 }
 

@@ -43,7 +43,7 @@ fn run(delta_t: f64, gap0: f64) -> (MechanicsModel, Mesh) {
 fn cooled_blocks_open_the_joint_by_their_free_contraction_without_stress() {
     let (m, mesh) = run(-10.0, 0.0);
     let expected = -ALPHA * -10.0 * (2.0 * L_BLOCK);
-    assert!(!m.points.is_empty());
+    assert!(!m.points().is_empty());
     for st in &m.state.joints {
         assert_eq!(st.state, PointState::Open);
         assert!(
