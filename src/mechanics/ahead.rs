@@ -64,7 +64,10 @@
 //! its start, the next live set is numbered and analysed ahead too
 //! ([`Births`]), its new joint pairs guessed in the state a rebuild gives
 //! them, and the rebuild after the pours adopts that system if its live
-//! elements are those. A factor is used only if the next step is that
+//! elements are those. That analysis (with the step's K̃ and first-pass
+//! matrix) runs on a thread of its own from the order, which the job
+//! joins before it factorises ([`BuildBirths`]), unless the other core is
+//! the busier one; which thread made it changes no bit. A factor is used only if the next step is that
 //! interval on that live system and its assembled K̃ equals the one
 //! factorised, bit for bit; otherwise it is discarded (counted). The main thread always waits
 //! for it, so whether it is used never depends on timing: a run stays
@@ -89,6 +92,10 @@ use super::live::{LiveSystem, PARALLEL_FROM_DOFS};
 /// complete Xiaowan-like arch (324M entries, 2.6 GB each) would pass its
 /// 8 GB budget with the capacitance columns and the model.
 const AHEAD_MAX_BYTES: usize = 3 << 29;
+
+/// A wait for the factor made ahead longer than this [s] says the other
+/// core is the busier one ([`FactorAhead::other_core_busier`]).
+const BUSY_WAIT: f64 = 1e-3;
 
 /// What factorising ahead did (`groutready study perf`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -131,6 +138,8 @@ pub struct FactorAhead {
     /// next mechanical step, which waits for it ([`FactorAhead::settle`])
     running: Option<JoinHandle<Done>>,
     ready: Option<Made>,
+    /// how long the last step waited for its factor made ahead [s]
+    last_waited: f64,
     pub stats: AheadStats,
 }
 
@@ -206,10 +215,11 @@ impl Made {
 }
 
 /// The next live system's analysis, its step's K̃ and the first pass's
-/// matrix, made on a thread of their own from the moment the step is
-/// ordered: None when the analysis or the assembly fails (the step then
-/// rebuilds and reports the error).
-pub type BuildBirths = JoinHandle<Option<Analysed>>;
+/// matrix: made by the job, which joins the thread making them since the
+/// step was ordered, or takes them made already (on the step's thread when
+/// the other core was the busier one). None when the analysis or the
+/// assembly fails (the step then rebuilds and reports the error).
+pub type BuildBirths = Box<dyn FnOnce() -> Option<Analysed> + Send>;
 
 /// The next step's own live system, analysed ahead with its K̃ and the
 /// matrix of its first pass.
@@ -239,8 +249,8 @@ enum Work {
         assembled: Assembled,
         prepared: Prepared,
     },
-    /// the next step pours lifts: its live system is being numbered and
-    /// analysed, its K̃ assembled, off the step's thread
+    /// the next step pours lifts: its live system numbered and analysed,
+    /// its K̃ assembled ([`BuildBirths`])
     Births(BuildBirths),
 }
 
@@ -336,7 +346,7 @@ impl Job {
                     let solver = solver.expect("a job on this live system has its solver");
                     (Target::Solver(solver), assembled, prepared)
                 }
-                Work::Births(build) => match build.join().ok().flatten() {
+                Work::Births(build) => match build() {
                     Some(a) => {
                         analysed = a.seconds;
                         (Target::Born(Box::new(a.births)), a.assembled, a.prepared)
@@ -395,6 +405,7 @@ impl FactorAhead {
         let done = handle
             .join()
             .unwrap_or_else(|p| std::panic::resume_unwind(p));
+        self.last_waited = t.elapsed().as_secs_f64();
         let flops = match done.made.as_ref().map(|m| &m.target) {
             Some(Target::Solver(s)) => s.factor_flops(),
             Some(Target::Born(b)) => b.sys.solver.factor_flops(),
@@ -402,6 +413,13 @@ impl FactorAhead {
         };
         self.finish(done, t.elapsed().as_secs_f64())
             .then_some(flops)
+    }
+
+    /// Whether the last step waited for its factor made ahead: the other
+    /// core is then the busier one, and the next live set is better
+    /// analysed on the step's thread ([`BuildBirths`]).
+    pub fn other_core_busier(&self) -> bool {
+        self.last_waited > BUSY_WAIT
     }
 
     pub fn set_enabled(&mut self, on: bool) {
