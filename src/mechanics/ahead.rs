@@ -94,8 +94,22 @@ use super::live::{LiveSystem, PARALLEL_FROM_DOFS};
 const AHEAD_MAX_BYTES: usize = 3 << 29;
 
 /// A wait for the factor made ahead longer than this [s] says the other
-/// core is the busier one ([`FactorAhead::other_core_busier`]).
+/// core is the busier one ([`FactorAhead::births_here`]).
 const BUSY_WAIT: f64 = 1e-3;
+
+/// Where the next live set is analysed when the next step pours lifts
+/// ([`BuildBirths`]). The answer is the same to the bit in each.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum BirthsPlacement {
+    /// on a thread of its own, unless the last step waited for its factor
+    /// made ahead (the other core is then the busier one)
+    #[default]
+    Balanced,
+    /// always on a thread of its own
+    Thread,
+    /// always on the step's thread
+    Step,
+}
 
 /// What factorising ahead did (`groutready study perf`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -140,6 +154,7 @@ pub struct FactorAhead {
     ready: Option<Made>,
     /// how long the last step waited for its factor made ahead [s]
     last_waited: f64,
+    placement: BirthsPlacement,
     pub stats: AheadStats,
 }
 
@@ -415,11 +430,19 @@ impl FactorAhead {
             .then_some(flops)
     }
 
-    /// Whether the last step waited for its factor made ahead: the other
-    /// core is then the busier one, and the next live set is better
-    /// analysed on the step's thread ([`BuildBirths`]).
-    pub fn other_core_busier(&self) -> bool {
-        self.last_waited > BUSY_WAIT
+    /// Whether the next live set is analysed on the step's thread
+    /// ([`BirthsPlacement`]): by default when the last step waited for its
+    /// factor made ahead, the other core being the busier one.
+    pub fn births_here(&self) -> bool {
+        match self.placement {
+            BirthsPlacement::Balanced => self.last_waited > BUSY_WAIT,
+            BirthsPlacement::Thread => false,
+            BirthsPlacement::Step => true,
+        }
+    }
+
+    pub fn set_births_placement(&mut self, placement: BirthsPlacement) {
+        self.placement = placement;
     }
 
     pub fn set_enabled(&mut self, on: bool) {

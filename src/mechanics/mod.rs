@@ -47,6 +47,7 @@ pub mod rock_ties;
 pub mod settings;
 pub mod supports;
 
+pub use ahead::BirthsPlacement;
 pub use error::MechError;
 pub use model::{JointReading, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};

@@ -17,10 +17,11 @@ use crate::scene::OrderingKind;
 use crate::vocab::JointState;
 
 use super::ahead::{
-    AheadStats, Analysed, Assembled, Births, BuildBirths, FactorAhead, FactorGuess, NextStep, Order,
+    AheadStats, Analysed, Assembled, Births, BirthsPlacement, BuildBirths, FactorAhead,
+    FactorGuess, NextStep, Order,
 };
 use super::contact_step::{self, JointSolveSettings, Prepared, RefactorCounts, StepSystem};
-pub use super::error::MechError;
+use super::error::MechError;
 use super::error::RESIDUAL_TOLERANCE;
 use super::frame::{ElementTables, Frame};
 use super::grout_stops::{inside_grout_stops, StopSample};
@@ -460,6 +461,12 @@ impl MechanicsModel {
         self.ahead.set_enabled(on && factor_ahead(&self.settings));
     }
 
+    /// Where the next live set is analysed when the next step pours lifts
+    /// (balanced between the cores by default; the answer is the same).
+    pub fn set_births_placement(&mut self, placement: BirthsPlacement) {
+        self.ahead.set_births_placement(placement);
+    }
+
     /// Waits for the factorisation running ahead, if any, and counts it.
     fn settle_ahead(&mut self) {
         if let Some(flops) = self.ahead.settle() {
@@ -821,7 +828,7 @@ impl MechanicsModel {
                 seconds: t.elapsed().as_secs_f64(),
             })
         };
-        let build: BuildBirths = if self.ahead.other_core_busier() {
+        let build: BuildBirths = if self.ahead.births_here() {
             let done = work();
             Box::new(move || done)
         } else {

@@ -13,6 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use groutready::app::{self, Inputs};
+use groutready::mechanics::BirthsPlacement;
 use groutready::sim::{History, Simulation};
 use groutready::vocab::JointState;
 
@@ -90,6 +91,39 @@ fn reproducible_in_one_process() {
     assert!(
         a.1 == b.1,
         "two runs differ: {labels} of {total} labels, apertures by {da:.3e} m, \
+         zone temperatures by {dt:.3e} °C"
+    );
+}
+
+/// The next live set analysed on a thread of its own or on the step's
+/// thread (where `BirthsPlacement::Balanced` puts it, by the waits) gives
+/// the same bits, and both analyse live sets ahead.
+#[test]
+fn the_next_live_set_is_the_same_on_either_thread() {
+    let inputs = inputs();
+    let run = |placement| {
+        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.mechanics
+            .as_mut()
+            .unwrap()
+            .set_births_placement(placement);
+        sim.set_end_day(inputs.scene.epoch.day(END_DATE.parse().unwrap()));
+        let stats = sim.run(None, &mut |_, _| {}).unwrap();
+        let ahead = stats.mechanics.unwrap().ahead;
+        let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
+        (sim.history(), bits, ahead.on_new_systems)
+    };
+    let (a, b) = (run(BirthsPlacement::Thread), run(BirthsPlacement::Step));
+    assert!(
+        a.2 > 0 && a.2 == b.2,
+        "live sets analysed ahead: {} on threads, {} on the step's",
+        a.2,
+        b.2
+    );
+    let (labels, total, da, dt) = differences(&a.0, &b.0);
+    assert!(
+        a.1 == b.1,
+        "the placements differ: {labels} of {total} labels, apertures by {da:.3e} m, \
          zone temperatures by {dt:.3e} °C"
     );
 }
