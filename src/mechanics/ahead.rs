@@ -67,11 +67,11 @@
 //! elements are those. That analysis (with the step's K̃ and first-pass
 //! matrix) runs on a thread of its own from the order, which the job
 //! joins before it factorises ([`BuildBirths`]), unless the other core is
-//! the busier one; which thread made it changes no bit. A factor is used only if the next step is that
-//! interval on that live system and its assembled K̃ equals the one
-//! factorised, bit for bit; otherwise it is discarded (counted). The main thread always waits
-//! for it, so whether it is used never depends on timing: a run stays
-//! bit-reproducible.
+//! the busier one; which thread made it changes no bit. A factor is used
+//! only if the next step is that interval on that live system and its
+//! assembled K̃ equals the one factorised, bit for bit; otherwise it is
+//! discarded (counted). The main thread always waits for it, so whether it
+//! is used never depends on timing: a run stays bit-reproducible.
 //!
 //! Off (`solver.factor_ahead = false`) where the second core is busy: the
 //! planner's two remedy searches already run side by side.
@@ -130,8 +130,9 @@ pub struct AheadStats {
     /// wall time of the factorisations ahead, on the second core [s]
     pub seconds: f64,
     /// wall time of the next live systems' analyses and K̃ (lifts poured
-    /// at the next step's start), each on a thread of its own from its
-    /// order (the factorisation waits for it) [s]
+    /// at the next step's start) made on threads of their own from their
+    /// orders (those made on the step's thread count as its symbolic
+    /// time) [s]
     #[serde(default)]
     pub seconds_analysed: f64,
     /// time the step waited for a factorisation ahead to finish [s]
@@ -242,7 +243,8 @@ pub struct Analysed {
     pub births: Births,
     pub assembled: Assembled,
     pub prepared: Prepared,
-    /// wall time of the analysis and assembly [s]
+    /// wall time of the analysis and assembly on a thread of its own (0
+    /// when made on the step's thread) [s]
     pub seconds: f64,
 }
 
@@ -316,10 +318,16 @@ pub struct FactorGuess {
 pub struct Job {
     interval: (f64, f64),
     states: Vec<JointPointState>,
-    work: Work,
-    /// the solver to factorise into, on this live system (for
-    /// [`Work::Made`])
-    solver: Option<CholeskySolver>,
+    work: JobWork,
+}
+
+/// What a job factorises into, and what.
+enum JobWork {
+    /// a solver on this live system, and the order's K̃ and first-pass
+    /// matrix
+    Solver(Box<(CholeskySolver, Assembled, Prepared)>),
+    /// the next step's own live system, from its analysis
+    Births(BuildBirths),
 }
 
 /// A finished [`Job`].
@@ -328,7 +336,7 @@ pub struct Done {
     made: Option<Made>,
     result: Result<(), SolveError>,
     seconds: f64,
-    /// the next live system's analysis and assembly, on a thread of its own
+    /// [`Analysed::seconds`]
     analysed: f64,
 }
 
@@ -347,21 +355,13 @@ impl Job {
         std::thread::spawn(move || {
             let t = Instant::now();
             let mut analysed = 0.0;
-            let Job {
-                interval,
-                work,
-                solver,
-                ..
-            } = self;
+            let Job { interval, work, .. } = self;
             let (target, assembled, prepared) = match work {
-                Work::Made {
-                    assembled,
-                    prepared,
-                } => {
-                    let solver = solver.expect("a job on this live system has its solver");
+                JobWork::Solver(made) => {
+                    let (solver, assembled, prepared) = *made;
                     (Target::Solver(solver), assembled, prepared)
                 }
-                Work::Births(build) => match build() {
+                JobWork::Births(build) => match build() {
                     Some(a) => {
                         analysed = a.seconds;
                         (Target::Born(Box::new(a.births)), a.assembled, a.prepared)
@@ -560,18 +560,23 @@ impl FactorAhead {
     /// or into the spare solver on `live` (a fork of its solver when no
     /// spare fits).
     pub fn job(&mut self, order: Order, live: &LiveSystem) -> Result<Job, SolveError> {
-        let solver = match order.work {
-            Work::Births(_) => None,
-            Work::Made { .. } => Some(match self.spare.take() {
-                Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
-                _ => live.solver.fork()?,
-            }),
+        let work = match order.work {
+            Work::Births(build) => JobWork::Births(build),
+            Work::Made {
+                assembled,
+                prepared,
+            } => {
+                let solver = match self.spare.take() {
+                    Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
+                    _ => live.solver.fork()?,
+                };
+                JobWork::Solver(Box::new((solver, assembled, prepared)))
+            }
         };
         Ok(Job {
             interval: order.interval,
             states: order.states,
-            work: order.work,
-            solver,
+            work,
         })
     }
 

@@ -819,7 +819,6 @@ impl MechanicsModel {
         let frame = Arc::clone(&self.frame);
         let guess = states.clone();
         let work = move || {
-            let t = Instant::now();
             let sys = frame.live_system(&live, &pair_live).ok()?;
             let assembled = frame.stiffness(&sys, &birth, t0, t1).ok()?;
             let prepared = Prepared::first_pass(&assembled.stiffness, &sys, &guess);
@@ -827,7 +826,7 @@ impl MechanicsModel {
                 births: Births { live, paired, sys },
                 assembled,
                 prepared,
-                seconds: t.elapsed().as_secs_f64(),
+                seconds: 0.0,
             })
         };
         let build: BuildBirths = if self.ahead.births_here() {
@@ -837,7 +836,14 @@ impl MechanicsModel {
             self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
             Box::new(move || done)
         } else {
-            let h = std::thread::spawn(work);
+            let h = std::thread::spawn(move || {
+                let t = Instant::now();
+                let mut done = work();
+                if let Some(a) = done.as_mut() {
+                    a.seconds = t.elapsed().as_secs_f64();
+                }
+                done
+            });
             Box::new(move || h.join().ok().flatten())
         };
         Some(Order::births(next.interval, states, build))
