@@ -422,7 +422,7 @@ fn print_mechanics(m: &MechStats) {
     );
     let a = &m.ahead;
     println!(
-        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} on a live set analysed ahead, {:.2} s of it analysing), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
+        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} on a live set analysed ahead; {:.2} s of analyses on threads of their own), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
         "",
         a.made,
         a.seconds,
