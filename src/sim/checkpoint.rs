@@ -207,6 +207,7 @@ impl Simulation<'_> {
         self.checkpoints.retain(|c| c.day < ck.day);
         self.checkpoints.push(ck.clone());
         self.events_pending = true;
+        self.thermal_ahead = false;
     }
 
     pub(super) fn maybe_checkpoint(&mut self) {

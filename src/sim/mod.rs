@@ -7,6 +7,7 @@
 //! the parallel factorisations of large systems are deterministic per thread
 //! count (docs/ARCHITECTURE.md, "Reproducibility"; `tests/it/reproducible.rs`).
 
+mod beside;
 pub mod checkpoint;
 pub mod snapshot;
 pub mod timeline;
@@ -132,6 +133,9 @@ pub struct RunStats {
     pub thermal: Option<ThermalStats>,
     pub mechanics: Option<MechStats>,
     pub seconds: f64,
+    /// mechanical steps run beside the next day's thermal steps, by this
+    /// process ([`beside`])
+    pub mechanical_steps_beside: usize,
     /// what the run found questionable in its inputs (cooling targets that
     /// had no effect)
     pub warnings: Vec<crate::schedule::Warning>,
@@ -174,6 +178,14 @@ pub struct Simulation<'a> {
     mech_t0: f64,
     mech_temps0: Option<Vec<f64>>,
     mech_steps: usize,
+    /// step the thermal model to the next midnight on this thread while the
+    /// mechanical step of the day runs on another ([`beside`])
+    thermal_beside: bool,
+    /// the thermal model has reached `day` already: the next pass of the
+    /// loop takes no thermal step
+    thermal_ahead: bool,
+    /// mechanical steps run beside the thermal steps by this process
+    mech_steps_beside: usize,
 }
 
 impl<'a> Simulation<'a> {
@@ -267,6 +279,9 @@ impl<'a> Simulation<'a> {
             mech_t0: 0.0,
             mech_temps0: None,
             mech_steps: 0,
+            thermal_beside: scene.solver.factor_ahead,
+            thermal_ahead: false,
+            mech_steps_beside: 0,
         })
     }
 
@@ -301,18 +316,11 @@ impl<'a> Simulation<'a> {
             snapshot,
             grouting,
         } = events;
-        if let Some(m) = self.mechanics.as_mut() {
-            for z in grouting {
-                m.grout(z.joint, z.zone, self.day);
-            }
-        }
+        self.apply_mechanics_events(self.day, &grouting, &pours);
         let mut restart = stage_change;
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
                 th.pour(block, lift, self.day, temp);
-            }
-            if let Some(m) = self.mechanics.as_mut() {
-                m.pour(block, lift, self.day);
             }
             self.pours_done += 1;
             restart = true;
@@ -331,6 +339,20 @@ impl<'a> Simulation<'a> {
             })?;
         }
         Ok(())
+    }
+
+    /// The mechanical model's part of the day's events: the zones grouted,
+    /// then the lifts poured (the thermal model's part does not depend on
+    /// it, nor it on the thermal model's).
+    fn apply_mechanics_events(&mut self, day: f64, grouting: &[ZoneId], pours: &[(u32, u32, f64)]) {
+        if let Some(m) = self.mechanics.as_mut() {
+            for z in grouting {
+                m.grout(z.joint, z.zone, day);
+            }
+            for &(block, lift, _) in pours {
+                m.pour(block, lift, day);
+            }
+        }
     }
 
     /// Runs to the end of the timeline. `snapshots` receives the fields on
@@ -362,7 +384,7 @@ impl<'a> Simulation<'a> {
             self.record();
             self.events_pending = false;
         }
-        while self.day < end {
+        while self.day < end || self.thermal_ahead {
             if self
                 .cancel
                 .as_ref()
@@ -370,34 +392,21 @@ impl<'a> Simulation<'a> {
             {
                 return Err(SimError::Cancelled(self.scene.epoch.date_at(self.day)));
             }
-            let next = self.timeline.next_event_after(self.day);
-            let dt = self.ladder.next_step(&self.scene.time, self.day, next);
-            let t1 = snap(self.day + dt);
-            if let Some(th) = self.thermal.as_mut() {
-                if let Err(source) = th.step(self.day, t1) {
-                    let at = source
-                        .pivot_dof()
-                        .and_then(|i| th.dof_of_unknown(i))
-                        .and_then(|d| self.mesh.node_of_thermal_dof(d))
-                        .map(|n| {
-                            format!(
-                                "; the failing pivot is the temperature of {}",
-                                self.mesh.describe_node(n)
-                            )
-                        })
-                        .unwrap_or_default();
-                    let date = self.scene.epoch.date_at(t1);
-                    return Err(SimError::ThermalAt { date, source, at });
-                }
+            if !std::mem::take(&mut self.thermal_ahead) {
+                self.thermal_step()?;
             }
-            self.day = t1;
-            self.steps += 1;
             // Mechanics steps from midnight to midnight (or over the longer
             // thermal steps): the thermal strain is a difference of states, so
             // the sub-day thermal steps after a pour add up exactly, and every
             // pour and grouting date is a midnight.
             let stepped =
                 (self.day.fract() == 0.0 || self.day >= end) && self.mechanical_step_due(end);
+            if let Some(m) = stepped.then(|| self.take_for_beside(end)).flatten() {
+                if self.step_beside(m, end, progress, stop)? {
+                    break;
+                }
+                continue;
+            }
             if stepped {
                 self.mechanical_step()?;
             }
@@ -423,6 +432,7 @@ impl<'a> Simulation<'a> {
             thermal: self.thermal.as_ref().map(|t| t.stats),
             mechanics: self.mechanics.as_ref().map(|m| m.stats),
             seconds: start.elapsed().as_secs_f64(),
+            mechanical_steps_beside: self.mech_steps_beside,
             warnings: self.warnings(),
         })
     }
@@ -475,6 +485,34 @@ impl<'a> Simulation<'a> {
         warm.chain(unused).collect()
     }
 
+    /// One thermal step from `day` on the ladder (ending at the next event
+    /// day at the latest); `day` becomes its end.
+    fn thermal_step(&mut self) -> Result<(), SimError> {
+        let next = self.timeline.next_event_after(self.day);
+        let dt = self.ladder.next_step(&self.scene.time, self.day, next);
+        let t1 = snap(self.day + dt);
+        if let Some(th) = self.thermal.as_mut() {
+            if let Err(source) = th.step(self.day, t1) {
+                let at = source
+                    .pivot_dof()
+                    .and_then(|i| th.dof_of_unknown(i))
+                    .and_then(|d| self.mesh.node_of_thermal_dof(d))
+                    .map(|n| {
+                        format!(
+                            "; the failing pivot is the temperature of {}",
+                            self.mesh.describe_node(n)
+                        )
+                    })
+                    .unwrap_or_default();
+                let date = self.scene.epoch.date_at(t1);
+                return Err(SimError::ThermalAt { date, source, at });
+            }
+        }
+        self.day = t1;
+        self.steps += 1;
+        Ok(())
+    }
+
     /// Does the pending mechanical step end at this midnight? Always with
     /// `time.mechanics_max_step_days = 1`; otherwise when it spans that many
     /// days, at the end, on a day with events or a read history row (pours,
@@ -491,17 +529,34 @@ impl<'a> Simulation<'a> {
 
     /// Remembers the start of the next mechanical step (after the day's events).
     fn begin_mechanical_step(&mut self) {
-        if self.mechanics.is_none() {
-            return;
+        if self.mechanics.is_some() {
+            self.mark_mechanical_start();
         }
+    }
+
+    /// The next mechanical step starts now, at the temperatures of now.
+    fn mark_mechanical_start(&mut self) {
         self.mech_t0 = self.day;
         self.mech_temps0 = self.thermal.as_ref().map(|th| th.state.temperature.clone());
     }
 
     fn mechanical_step(&mut self) -> Result<(), SimError> {
-        let Some(m) = self.mechanics.as_mut() else {
+        if self.mechanics.is_none() {
+            return Ok(());
+        }
+        let job = self.mechanical_job();
+        let (Some(m), mesh) = (self.mechanics.as_mut(), self.mesh) else {
             return Ok(());
         };
+        let temps = match (&self.mech_temps0, &self.thermal) {
+            (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
+            _ => None,
+        };
+        job.run(m, mesh, temps)
+    }
+
+    /// The mechanical step ending now, but for the model and temperatures.
+    fn mechanical_job(&mut self) -> MechanicalJob {
         let t1 = self.day;
         let level = self.levels.as_ref().and_then(|l| {
             let first = l.first_day()?;
@@ -509,66 +564,71 @@ impl<'a> Simulation<'a> {
                 .then(|| l.at(t1.min(l.last_day().unwrap_or(t1))))
                 .flatten()
         });
-        let temps = match (&self.mech_temps0, &self.thermal) {
-            (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
-            _ => None,
-        };
         self.mech_steps += 1;
-        let mesh = self.mesh;
-        m.set_next_step(next_mechanical_step(
-            &self.scene.time,
-            &self.timeline,
-            self.ladder,
+        MechanicalJob {
+            step: self.mech_steps,
+            t0: self.mech_t0,
             t1,
-            self.timeline.end_day.t(),
-        ));
-        m.step(self.mech_t0, t1, temps, level).map_err(|source| {
-            let at = source
-                .pivot_dof()
-                .and_then(|d| m.node_of_unknown(d))
-                .map(|(n, c)| {
-                    let axis = ["x", "y", "z"][c as usize];
-                    format!(
-                        "; the failing pivot is the {axis} displacement of {}",
-                        mesh.describe_node(n)
-                    )
-                })
-                .unwrap_or_default();
-            SimError::MechanicsAt {
-                step: self.mech_steps,
-                date: self.scene.epoch.date_at(t1),
-                source,
-                at,
-            }
-        })
+            level,
+            next: next_mechanical_step(
+                &self.scene.time,
+                &self.timeline,
+                self.ladder,
+                t1,
+                self.timeline.end_day.t(),
+            ),
+            epoch: self.scene.epoch,
+        }
     }
 
-    /// Factorise each mechanical step on the second core while the step
-    /// before runs (`solver.factor_ahead`, on by default); off where the
-    /// cores are otherwise busy. The answer is the same to round-off.
+    /// Use the second core (`solver.factor_ahead`, on by default): factorise
+    /// each mechanical step while the step before runs, and step the thermal
+    /// model to the next midnight while a mechanical step runs
+    /// ([`beside`]); off where the cores are otherwise busy. The answer is
+    /// the same to round-off (the thermal steps beside: to the bit).
     pub fn set_factor_ahead(&mut self, on: bool) {
         if let Some(m) = self.mechanics.as_mut() {
             m.set_factor_ahead(on);
         }
+        self.thermal_beside = on && self.scene.solver.factor_ahead;
+    }
+
+    /// Step the thermal model beside the mechanical steps (on with
+    /// [`Simulation::set_factor_ahead`]); off, everything runs in order on
+    /// the run's thread. The answer is the same to the bit.
+    pub fn set_thermal_beside(&mut self, on: bool) {
+        self.thermal_beside = on;
     }
 
     fn record(&mut self) {
-        self.record_joints();
-        if let Some(th) = &self.thermal {
-            let side = |(block, from, to): (u32, u32, u32)| {
-                th.lifts_mean(block, from, to).unwrap_or(f64::NAN)
-            };
-            let row = self
-                .zone_temps
-                .zones
-                .iter()
-                .map(|z| [side(z.lifts_a), side(z.lifts_b)])
-                .collect();
-            self.zone_temps.rows.push((Day::containing(self.day), row));
+        let sites = self.record_temperatures();
+        let dofs = self
+            .thermal
+            .as_ref()
+            .map(|th| th.state.temperature.as_slice());
+        if let Some(row) = self.joint_row(sites.as_deref().zip(dofs)) {
+            self.joint_records
+                .rows
+                .push((Day::containing(self.day), row));
         }
-        let Some(th) = &self.thermal else { return };
+    }
+
+    /// Records the day's zone temperatures and zone-point temperatures, and
+    /// returns the latter (NaN where a point's concrete is not poured; None
+    /// without a thermal model).
+    fn record_temperatures(&mut self) -> Option<Vec<f64>> {
+        let th = self.thermal.as_ref()?;
+        let side =
+            |(block, from, to): (u32, u32, u32)| th.lifts_mean(block, from, to).unwrap_or(f64::NAN);
+        let row = self
+            .zone_temps
+            .zones
+            .iter()
+            .map(|z| [side(z.lifts_a), side(z.lifts_b)])
+            .collect();
+        self.zone_temps.rows.push((Day::containing(self.day), row));
         let live = th.live_dofs();
-        let values = self
+        let values: Vec<f64> = self
             .mesh
             .zone_points
             .iter()
@@ -577,20 +637,25 @@ impl<'a> Simulation<'a> {
                     .unwrap_or(f64::NAN)
             })
             .collect();
-        self.records.rows.push((Day::containing(self.day), values));
+        self.records
+            .rows
+            .push((Day::containing(self.day), values.clone()));
+        Some(values)
     }
 
-    fn record_joints(&mut self) {
-        let Some(m) = &self.mechanics else { return };
+    /// The day's joint row; `temps` are the zone-point temperatures (as
+    /// [`Simulation::record_temperatures`] returns them) and the thermal-dof
+    /// temperatures of the day. None without joint columns.
+    fn joint_row(&self, temps: Option<(&[f64], &[f64])>) -> Option<Vec<Option<JointSample>>> {
+        let m = self.mechanics.as_ref()?;
         if self.joint_records.columns.is_empty() {
-            return;
+            return None;
         }
         let node_temp = |node: u32| -> f64 {
-            self.thermal.as_ref().map_or(f64::NAN, |th| {
-                th.state.temperature[self.mesh.thermal_dof[node as usize] as usize]
+            temps.map_or(f64::NAN, |(_, dofs)| {
+                dofs[self.mesh.thermal_dof[node as usize] as usize]
             })
         };
-        let live = self.thermal.as_ref().map(|th| th.live_dofs());
         let mut row = Vec::with_capacity(self.joint_records.columns.len());
         for col in &self.joint_records.columns {
             let sample = match col.site {
@@ -600,12 +665,7 @@ impl<'a> Simulation<'a> {
                         aperture: r.aperture,
                         state: r.state,
                         pressure: r.pressure,
-                        temperature: self
-                            .thermal
-                            .as_ref()
-                            .zip(live.as_deref())
-                            .and_then(|(th, live)| th.point_temperature(self.mesh, zp, live))
-                            .unwrap_or(f64::NAN),
+                        temperature: temps.map_or(f64::NAN, |(sites, _)| sites[index as usize]),
                     })
                 }
                 None => m
@@ -624,9 +684,7 @@ impl<'a> Simulation<'a> {
             };
             row.push(sample);
         }
-        self.joint_records
-            .rows
-            .push((Day::containing(self.day), row));
+        Some(row)
     }
 }
 
@@ -733,6 +791,53 @@ pub fn dam_layout(mesh: &Mesh) -> DamLayout {
     DamLayout {
         blocks: mesh.blocks.iter().map(|b| (b.block, b.n_lifts)).collect(),
         zones,
+    }
+}
+
+/// A mechanical step as the driver orders it: everything but the model and
+/// the temperatures, so that it can run on another thread
+/// ([`Simulation::step_beside`]).
+struct MechanicalJob {
+    /// its number in the run (1 the first)
+    step: usize,
+    t0: f64,
+    t1: f64,
+    /// the reservoir level at `t1`
+    level: Option<f64>,
+    /// the step after it, for the factorisation ahead
+    next: Option<NextStep>,
+    epoch: Epoch,
+}
+
+impl MechanicalJob {
+    /// Steps `m`; `temps` are the thermal-dof temperatures at `t0` and `t1`.
+    fn run(
+        self,
+        m: &mut MechanicsModel,
+        mesh: &Mesh,
+        temps: Option<(&[f64], &[f64])>,
+    ) -> Result<(), SimError> {
+        m.set_next_step(self.next);
+        m.step(self.t0, self.t1, temps, self.level)
+            .map_err(|source| {
+                let at = source
+                    .pivot_dof()
+                    .and_then(|d| m.node_of_unknown(d))
+                    .map(|(n, c)| {
+                        let axis = ["x", "y", "z"][c as usize];
+                        format!(
+                            "; the failing pivot is the {axis} displacement of {}",
+                            mesh.describe_node(n)
+                        )
+                    })
+                    .unwrap_or_default();
+                SimError::MechanicsAt {
+                    step: self.step,
+                    date: self.epoch.date_at(self.t1),
+                    source,
+                    at,
+                }
+            })
     }
 }
 

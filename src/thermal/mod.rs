@@ -69,7 +69,7 @@ pub mod settings;
 
 pub use ledger::HeatLedger;
 pub use model::{
-    ThermalCheckpoint, ThermalError, ThermalModel, ThermalState, ThermalStats, UNUSED_TARGET_DAYS,
-    WARM_WATER_MARGIN_C,
+    ThermalCheckpoint, ThermalError, ThermalModel, ThermalRewind, ThermalState, ThermalStats,
+    UNUSED_TARGET_DAYS, WARM_WATER_MARGIN_C,
 };
 pub use settings::{RockThermal, ThermalMaterial, ThermalSettings};

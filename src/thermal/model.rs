@@ -131,6 +131,25 @@ pub struct ThermalCheckpoint {
     pub lift_pour_day: Vec<(u32, u32, f64)>,
 }
 
+/// What a thermal step changes of a model whose live set stays (between
+/// two days' events): the state and the stage running on each lift. A
+/// driver that steps the model ahead of a decision keeps one of the day it
+/// decides on, and swaps it in ([`ThermalModel::swap_rewind`]) to show or
+/// go back to that day. The live system and its factors are caches of the
+/// same live set and serve either day alike; the counters keep the work done.
+#[derive(Debug, Clone)]
+pub struct ThermalRewind {
+    state: ThermalState,
+    lift_stage: BTreeMap<(u32, u32), usize>,
+}
+
+impl ThermalRewind {
+    /// The temperature per thermal dof on its day.
+    pub fn temperature(&self) -> &[f64] {
+        &self.state.temperature
+    }
+}
+
 pub struct ThermalModel {
     pub data: ElementData,
     settings: ThermalSettings,
@@ -526,6 +545,21 @@ impl ThermalModel {
         }
         self.sys = LiveSystem::empty(self.state.temperature.len());
         self.dirty = true;
+    }
+
+    /// The state of now, to come back to ([`ThermalRewind`]).
+    pub fn rewind_point(&self) -> ThermalRewind {
+        ThermalRewind {
+            state: self.state.clone(),
+            lift_stage: self.lift_stage.clone(),
+        }
+    }
+
+    /// Exchanges the model's state with `r`'s: after steps without events,
+    /// back to the day `r` was taken on (and `r` then holds the later day).
+    pub fn swap_rewind(&mut self, r: &mut ThermalRewind) {
+        std::mem::swap(&mut self.state, &mut r.state);
+        std::mem::swap(&mut self.lift_stage, &mut r.lift_stage);
     }
 
     /// Mean temperature of the concrete of (block, lift) elements, if live.

@@ -128,6 +128,92 @@ fn the_next_live_set_is_the_same_on_either_thread() {
     );
 }
 
+/// The thermal steps run beside the mechanical steps (the default) or in
+/// order on the run's thread give the same bits.
+#[test]
+fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
+    let inputs = inputs();
+    let run = |beside| {
+        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.set_thermal_beside(beside);
+        sim.set_end_day(inputs.scene.epoch.day(END_DATE.parse().unwrap()));
+        let stats = sim.run(None, &mut |_, _| {}).unwrap();
+        let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
+        (
+            sim.history(),
+            bits,
+            stats.mechanical_steps_beside,
+            stats.steps,
+        )
+    };
+    let (a, b) = (run(true), run(false));
+    assert!(
+        a.2 > 0 && b.2 == 0,
+        "mechanical steps beside the thermal steps: {} when on, {} when off",
+        a.2,
+        b.2
+    );
+    assert_eq!(a.3, b.3, "thermal steps");
+    let (labels, total, da, dt) = differences(&a.0, &b.0);
+    assert!(
+        a.1 == b.1,
+        "beside and in order differ: {labels} of {total} labels, apertures by {da:.3e} m, \
+         zone temperatures by {dt:.3e} °C"
+    );
+}
+
+/// A run stopped at a midnight whose mechanical step ran beside the next
+/// day's thermal steps shows its stop rule the run as it stands at that
+/// midnight (the thermal model not yet stepped on), and goes on from there
+/// to the bits of a run never stopped.
+#[test]
+fn a_run_stopped_beside_a_mechanical_step_goes_on_to_the_same_bits() {
+    let inputs = inputs();
+    let epoch = inputs.scene.epoch;
+    let end = epoch.day(END_DATE.parse().unwrap());
+    let stop_at = epoch.day("2024-05-26".parse().unwrap());
+    // what the stop rule sees at `stop_at`: the day, the thermal steps so
+    // far and the temperature bits, then the whole run's bits
+    let run = |beside: bool, stop: bool| {
+        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.set_thermal_beside(beside);
+        sim.set_end_day(end);
+        let mut seen = None;
+        let mut rule = |day: groutready::vocab::Day, s: &Simulation| {
+            if day == stop_at {
+                let th = s.thermal.as_ref().unwrap();
+                seen = Some((s.day, postcard::to_stdvec(&th.state).unwrap()));
+                return stop;
+            }
+            false
+        };
+        let first = sim.run_until(None, &mut |_, _| {}, &mut rule).unwrap();
+        let mut beside_steps = first.mechanical_steps_beside;
+        if stop {
+            assert_eq!(sim.day, stop_at.t(), "the run stops at the rule's day");
+            beside_steps = sim
+                .run(None, &mut |_, _| {})
+                .unwrap()
+                .mechanical_steps_beside;
+        }
+        let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
+        (seen.unwrap(), bits, beside_steps)
+    };
+    let stopped = run(true, true);
+    let in_order = run(false, false);
+    assert!(stopped.2 > 0, "no mechanical step ran beside");
+    assert!(
+        stopped.0 == in_order.0,
+        "the stop rule saw day {} and another thermal state than the run in order (day {})",
+        stopped.0 .0,
+        in_order.0 .0
+    );
+    assert!(
+        stopped.1 == in_order.1,
+        "the run stopped and gone on differs from the run in order"
+    );
+}
+
 /// The small dam scene shortened to [`END_DATE`] with a snapshot on
 /// [`SNAPSHOT_DATE`], written into `dir`.
 fn short_scene(dir: &Path) -> PathBuf {

@@ -1,0 +1,172 @@
+//! A mechanical step and the next day's thermal steps on two threads.
+//!
+//! The thermal model never reads the mechanical one: temperatures drive the
+//! strains, and no stress, joint state or grouting changes a temperature.
+//! So once the thermal model has reached a midnight d where a mechanical
+//! step ends, that step and the thermal steps from d to the next midnight d'
+//! are independent work. [`Simulation::step_beside`] runs them together:
+//!
+//! 1. the step's order is made ([`super::MechanicalJob`]: its interval, the
+//!    water level, the step after it for the factorisation ahead), and the
+//!    mechanical model moves to a scoped thread with copies of the
+//!    temperatures at the step's start and at d;
+//! 2. on the run's thread: the thermal part of d's events (pours, cooling
+//!    stages), the start of the next mechanical step (the temperatures at
+//!    d after them), d's temperature rows, a rewind point, and the thermal
+//!    steps to d';
+//! 3. the step joined: the mechanical part of d's events (grouting, then
+//!    pours, as in [`Simulation::apply_events`]), d's joint row (read with
+//!    the temperatures kept at d), the progress, and the stop rule, which
+//!    is shown the run as it stood at d (the rewind point swapped in, and
+//!    swapped back unless the run stops there).
+//!
+//! The loop then goes on at d' as if its thermal steps had just been taken.
+//! Only the order of independent work changes, so the answer is the same
+//! to the bit (`tests/it/reproducible.rs` compares a run with and without).
+//! A day with a checkpoint or a snapshot, which hold both models at d, runs
+//! in order, as does a run told its second core is busy
+//! ([`Simulation::set_factor_ahead`]).
+//!
+//! The demo's whole construction (2 cores; `study perf`): the thermal
+//! steps, about 10 s of the run's thread, moved beside the mechanical
+//! steps, whose thread waits for the factorisations made ahead.
+
+use crate::mechanics::MechanicsModel;
+use crate::thermal::ThermalRewind;
+use crate::vocab::Day;
+
+use super::timeline::Ladder;
+use super::{SimError, Simulation, StopWhen};
+
+/// The run as it stood at the midnight its thermal model stepped on from.
+struct Rewind {
+    thermal: Option<ThermalRewind>,
+    day: f64,
+    ladder: Ladder,
+    steps: usize,
+}
+
+/// What the run's thread made while the mechanical step ran.
+struct Ahead {
+    rewind: Rewind,
+    /// the zone-point temperatures recorded at d
+    sites: Option<Vec<f64>>,
+    /// the error of a thermal step after d, reported only if the run goes on
+    thermal: Result<(), SimError>,
+}
+
+impl Simulation<'_> {
+    /// The mechanical model, taken out of the run, when the step ending now
+    /// may run beside the next day's thermal steps: the second core is the
+    /// run's, both models exist, and this day has no checkpoint or
+    /// snapshot.
+    pub(super) fn take_for_beside(&mut self, end: f64) -> Option<MechanicsModel> {
+        let fits = self.thermal_beside
+            && self.thermal.is_some()
+            && self.day < end
+            && !self.checkpoint_due()
+            && !self.timeline.at(self.day).is_some_and(|e| e.snapshot);
+        fits.then(|| self.mechanics.take()).flatten()
+    }
+
+    /// Runs the mechanical step of `m` ending at this midnight beside the
+    /// thermal steps to the next (see the module doc). True when `stop`
+    /// ends the run at this midnight.
+    pub(super) fn step_beside(
+        &mut self,
+        mut m: MechanicsModel,
+        end: f64,
+        progress: &mut dyn FnMut(f64, f64),
+        stop: &mut StopWhen,
+    ) -> Result<bool, SimError> {
+        let day = self.day;
+        let job = self.mechanical_job();
+        let temps = self
+            .mech_temps0
+            .take()
+            .zip(self.thermal.as_ref().map(|th| th.state.temperature.clone()));
+        let mesh = self.mesh;
+        let (m, stepped, ahead) = std::thread::scope(|s| {
+            let worker = s.spawn(move || {
+                let temps = temps.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice()));
+                let stepped = job.run(&mut m, mesh, temps);
+                (m, stepped)
+            });
+            let ahead = self.thermal_to_next_midnight(end);
+            let (m, stepped) = worker
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (m, stepped, ahead)
+        });
+        self.mechanics = Some(m);
+        self.mech_steps_beside += 1;
+        stepped?;
+        let Ahead {
+            mut rewind,
+            sites,
+            thermal,
+        } = ahead?;
+        if let Some(events) = self.timeline.at(day).cloned() {
+            self.apply_mechanics_events(day, &events.grouting, &events.pours);
+        }
+        let dofs = rewind.thermal.as_ref().map(|r| r.temperature());
+        if let Some(row) = self.joint_row(sites.as_deref().zip(dofs)) {
+            self.joint_records.rows.push((Day::containing(day), row));
+        }
+        progress(day, end);
+        self.swap_rewind(&mut rewind);
+        if stop(Day(day as i64), self) {
+            return Ok(true);
+        }
+        self.swap_rewind(&mut rewind);
+        thermal?;
+        self.thermal_ahead = true;
+        Ok(false)
+    }
+
+    /// The run's thread while a mechanical step runs (the mechanical model
+    /// is out): the ladder's growth at this midnight, the day's events
+    /// (their thermal part), the next mechanical step's start, the day's
+    /// temperature rows, then the thermal steps to the next midnight.
+    fn thermal_to_next_midnight(&mut self, end: f64) -> Result<Ahead, SimError> {
+        self.ladder.grow(&self.scene.time);
+        self.apply_events(None)?;
+        self.mark_mechanical_start();
+        let sites = self.record_temperatures();
+        let rewind = Rewind {
+            thermal: self.thermal.as_ref().map(|th| th.rewind_point()),
+            day: self.day,
+            ladder: self.ladder,
+            steps: self.steps,
+        };
+        let thermal = self.thermal_steps_to_midnight(end);
+        Ok(Ahead {
+            rewind,
+            sites,
+            thermal,
+        })
+    }
+
+    /// Thermal steps up to the next midnight (or the end), each but the last
+    /// followed by the ladder's growth as in [`Simulation::run_until`].
+    fn thermal_steps_to_midnight(&mut self, end: f64) -> Result<(), SimError> {
+        loop {
+            self.thermal_step()?;
+            if self.day.fract() == 0.0 || self.day >= end {
+                return Ok(());
+            }
+            self.ladder.grow(&self.scene.time);
+        }
+    }
+
+    /// Exchanges the run's day, ladder, step count and thermal state with
+    /// `r`'s.
+    fn swap_rewind(&mut self, r: &mut Rewind) {
+        if let (Some(th), Some(r)) = (self.thermal.as_mut(), r.thermal.as_mut()) {
+            th.swap_rewind(r);
+        }
+        std::mem::swap(&mut self.day, &mut r.day);
+        std::mem::swap(&mut self.ladder, &mut r.ladder);
+        std::mem::swap(&mut self.steps, &mut r.steps);
+    }
+}
