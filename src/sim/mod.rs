@@ -541,18 +541,17 @@ impl<'a> Simulation<'a> {
     }
 
     fn mechanical_step(&mut self) -> Result<(), SimError> {
-        if self.mechanics.is_none() {
-            return Ok(());
-        }
-        let job = self.mechanical_job();
-        let (Some(m), mesh) = (self.mechanics.as_mut(), self.mesh) else {
+        let Some(mut m) = self.mechanics.take() else {
             return Ok(());
         };
+        let job = self.mechanical_job();
         let temps = match (&self.mech_temps0, &self.thermal) {
             (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
             _ => None,
         };
-        job.run(m, mesh, temps)
+        let stepped = job.run(&mut m, self.mesh, temps);
+        self.mechanics = Some(m);
+        stepped
     }
 
     /// The mechanical step ending now, but for the model and temperatures.

@@ -414,10 +414,14 @@ fn killed_after_first_restart_point(scene: &Path, out: &Path) {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
+    // a whole checkpoint: `ck-DDDDD.tmp` is one being written, which a
+    // kill leaves unread (the run then starts from day 0)
     let kept = || {
         std::fs::read_dir(&restart).is_ok_and(|rd| {
-            rd.flatten()
-                .any(|e| e.file_name().to_string_lossy().starts_with("ck-"))
+            rd.flatten().any(|e| {
+                let name = e.file_name().to_string_lossy().into_owned();
+                name.starts_with("ck-") && name.ends_with(".bin")
+            })
         })
     };
     let start = std::time::Instant::now();
