@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use groutready::app::{self, Inputs};
 use groutready::mechanics::BirthsPlacement;
-use groutready::sim::{History, Simulation};
+use groutready::sim::{History, RunStats, Simulation};
 use groutready::vocab::JointState;
 
 use crate::common::{bin, repo};
@@ -29,16 +29,36 @@ fn inputs() -> Inputs {
     app::load_inputs(&repo("models/small_dam_joints.toml"), None).unwrap()
 }
 
-/// One in-process run to [`END_DATE`]: its histories, and the histories
-/// and the final state serialised (postcard writes every f64 as its bits,
-/// and a NaN of a point not yet poured equals itself there).
-fn run_in_process(inputs: &Inputs) -> (History, Vec<u8>) {
+/// One in-process run to [`END_DATE`], set up by `setup`: its histories,
+/// the histories and the final state serialised (postcard writes every f64
+/// as its bits, and a NaN of a point not yet poured equals itself there),
+/// and its counters.
+fn run_in_process(
+    inputs: &Inputs,
+    setup: impl FnOnce(&mut Simulation),
+) -> (History, Vec<u8>, RunStats) {
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+    setup(&mut sim);
     let end = inputs.scene.epoch.day(END_DATE.parse().unwrap());
     sim.set_end_day(end);
-    sim.run(None, &mut |_, _| {}).unwrap();
+    let stats = sim.run(None, &mut |_, _| {}).unwrap();
     let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
-    (sim.history(), bits)
+    (sim.history(), bits, stats)
+}
+
+/// Asserts that two runs' bits are the same; `what` names the two in the
+/// message, which says how far their histories are apart.
+fn assert_same_bits(
+    a: &(History, Vec<u8>, RunStats),
+    b: &(History, Vec<u8>, RunStats),
+    what: &str,
+) {
+    let (labels, total, da, dt) = differences(&a.0, &b.0);
+    assert!(
+        a.1 == b.1,
+        "{what} differ: {labels} of {total} labels, apertures by {da:.3e} m, \
+         zone temperatures by {dt:.3e} °C"
+    );
 }
 
 /// The labels that differ, the largest aperture difference [m] and the
@@ -71,8 +91,8 @@ fn differences(a: &History, b: &History) -> (usize, usize, f64, f64) {
 fn reproducible_in_one_process() {
     let inputs = inputs();
     let (a, b) = std::thread::scope(|s| {
-        let a = s.spawn(|| run_in_process(&inputs));
-        let b = run_in_process(&inputs);
+        let a = s.spawn(|| run_in_process(&inputs, |_| {}));
+        let b = run_in_process(&inputs, |_| {});
         (a.join().unwrap(), b)
     });
     let states: Vec<JointState> =
@@ -87,12 +107,7 @@ fn reproducible_in_one_process() {
             "no {s:?} point: the test misses friction"
         );
     }
-    let (labels, total, da, dt) = differences(&a.0, &b.0);
-    assert!(
-        a.1 == b.1,
-        "two runs differ: {labels} of {total} labels, apertures by {da:.3e} m, \
-         zone temperatures by {dt:.3e} °C"
-    );
+    assert_same_bits(&a, &b, "two runs");
 }
 
 /// The next live set analysed on a thread of its own or on the step's
@@ -102,30 +117,22 @@ fn reproducible_in_one_process() {
 fn the_next_live_set_is_the_same_on_either_thread() {
     let inputs = inputs();
     let run = |placement| {
-        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
-        sim.mechanics
-            .as_mut()
-            .unwrap()
-            .set_births_placement(placement);
-        sim.set_end_day(inputs.scene.epoch.day(END_DATE.parse().unwrap()));
-        let stats = sim.run(None, &mut |_, _| {}).unwrap();
-        let ahead = stats.mechanics.unwrap().ahead;
-        let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
-        (sim.history(), bits, ahead.on_new_systems)
+        run_in_process(&inputs, |sim| {
+            sim.mechanics
+                .as_mut()
+                .unwrap()
+                .set_births_placement(placement)
+        })
     };
     let (a, b) = (run(BirthsPlacement::Thread), run(BirthsPlacement::Step));
+    let ahead = |r: &(History, Vec<u8>, RunStats)| r.2.mechanics.unwrap().ahead.on_new_systems;
     assert!(
-        a.2 > 0 && a.2 == b.2,
+        ahead(&a) > 0 && ahead(&a) == ahead(&b),
         "live sets analysed ahead: {} on threads, {} on the step's",
-        a.2,
-        b.2
+        ahead(&a),
+        ahead(&b)
     );
-    let (labels, total, da, dt) = differences(&a.0, &b.0);
-    assert!(
-        a.1 == b.1,
-        "the placements differ: {labels} of {total} labels, apertures by {da:.3e} m, \
-         zone temperatures by {dt:.3e} °C"
-    );
+    assert_same_bits(&a, &b, "the placements");
 }
 
 /// The thermal steps run beside the mechanical steps (the default) or in
@@ -133,33 +140,15 @@ fn the_next_live_set_is_the_same_on_either_thread() {
 #[test]
 fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
     let inputs = inputs();
-    let run = |beside| {
-        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
-        sim.set_thermal_beside(beside);
-        sim.set_end_day(inputs.scene.epoch.day(END_DATE.parse().unwrap()));
-        let stats = sim.run(None, &mut |_, _| {}).unwrap();
-        let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
-        (
-            sim.history(),
-            bits,
-            stats.mechanical_steps_beside,
-            stats.steps,
-        )
-    };
+    let run = |beside| run_in_process(&inputs, |sim| sim.set_thermal_beside(beside));
     let (a, b) = (run(true), run(false));
+    let (beside_on, beside_off) = (a.2.mechanical_steps_beside, b.2.mechanical_steps_beside);
     assert!(
-        a.2 > 0 && b.2 == 0,
-        "mechanical steps beside the thermal steps: {} when on, {} when off",
-        a.2,
-        b.2
+        beside_on > 0 && beside_off == 0,
+        "mechanical steps beside the thermal steps: {beside_on} when on, {beside_off} when off"
     );
-    assert_eq!(a.3, b.3, "thermal steps");
-    let (labels, total, da, dt) = differences(&a.0, &b.0);
-    assert!(
-        a.1 == b.1,
-        "beside and in order differ: {labels} of {total} labels, apertures by {da:.3e} m, \
-         zone temperatures by {dt:.3e} °C"
-    );
+    assert_eq!(a.2.steps, b.2.steps, "thermal steps");
+    assert_same_bits(&a, &b, "beside and in order");
 }
 
 /// A run stopped at a midnight whose mechanical step ran beside the next
