@@ -18,8 +18,21 @@
 //!    is what a factorisation and a solve could keep from one day to the
 //!    next if that rock were condensed once.
 //!
+//! 5. layer merging (`mechanics::layer_merging`): the concrete's vertical
+//!    grid lines off the joint faces keeping only the node levels of the
+//!    grouting zones' boundaries, the nodes between tied to them, below
+//!    the top three zones of the dam poured to a half, three quarters and
+//!    all of its height; ordered by METIS on the tied set, by the untied
+//!    complete dam's order, and by the merged complete dam's order with
+//!    each node that may be tied just before its master below (the
+//!    mechanics' `ConstructionOrdering` with merging on). A copy of a scene
+//!    with `[lifts] height_m` at the zone height bounds what thicker layers
+//!    (rock and all) would give: the example builds the mesh alone.
+//!
 //!     cargo run --release --example rock_condensation [SCENE]
 use groutready::fem::{metis_nested_dissection, CholeskySolver, Ordering, Pattern};
+use groutready::mechanics::layer_merging::LayerMerge;
+use groutready::mechanics::Supports;
 use groutready::mesh::{Mesh, Part};
 use std::sync::Arc;
 use std::time::Instant;
@@ -28,12 +41,15 @@ fn main() -> anyhow::Result<()> {
     let path = std::env::args()
         .nth(1)
         .unwrap_or("models/demo_arch.toml".into());
-    let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
-    let mesh = &inputs.mesh;
+    // the mesh alone: a copy of a scene with other lifts (layer merging's
+    // bound, `[lifts] height_m`) need not match its schedules
+    let scene = groutready::scene::Scene::load(std::path::Path::new(&path))?;
+    let mesh = &groutready::app::build_mesh(&scene, &path)?;
     rock_layers(mesh);
     condensation(mesh)?;
     ordering_reuse(mesh)?;
-    frozen_subtrees(mesh)
+    frozen_subtrees(mesh)?;
+    merged_concrete(mesh)
 }
 
 fn node_dofs(v: u32) -> [u32; 3] {
@@ -351,5 +367,191 @@ fn frozen_share(
         100.0 * fl_frozen / fl,
         c_entries / 1e6
     );
+    Ok(())
+}
+
+/// Per node: itself, or the two masters `merge` ties it to when it is
+/// in `tied`.
+fn masters_of(merge: &LayerMerge, tied: &[u32], nn: usize) -> Vec<Vec<u32>> {
+    let mut masters: Vec<Vec<u32>> = (0..nn as u32).map(|v| vec![v]).collect();
+    for &v in tied {
+        if let Some(t) = merge.tie_of(v) {
+            masters[v as usize] = vec![t.lo, t.hi];
+        }
+    }
+    masters
+}
+
+/// The pattern of the complete dam with each node replaced by its masters.
+fn tied_pattern(
+    mesh: &Mesh,
+    masters: &[Vec<u32>],
+    map: &[u32],
+    n: u32,
+    live: &dyn Fn(usize) -> bool,
+) -> Arc<Pattern> {
+    let dofs = |nodes: &mut dyn Iterator<Item = u32>| {
+        let mut d: Vec<u32> = nodes
+            .flat_map(|v| masters[v as usize].clone())
+            .flat_map(|m| node_dofs(map[m as usize]))
+            .collect();
+        d.sort_unstable();
+        d.dedup();
+        d
+    };
+    let mut elems: Vec<Vec<u32>> = mesh
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|&(e, _)| live(e))
+        .map(|(_, c)| dofs(&mut c.iter().copied()))
+        .collect();
+    for p in &mesh.face_pairs {
+        for k in 0..4 {
+            if map[p.nodes_a[k] as usize] == u32::MAX && masters[p.nodes_a[k] as usize].len() == 1
+                || map[p.nodes_b[k] as usize] == u32::MAX
+                    && masters[p.nodes_b[k] as usize].len() == 1
+            {
+                continue;
+            }
+            elems.push(dofs(&mut [p.nodes_a[k], p.nodes_b[k]].into_iter()));
+        }
+    }
+    Arc::new(Pattern::new(3 * n as usize, &elems))
+}
+
+/// Node sequence of a dof order over `map`'s numbering.
+fn node_sequence(order: &[u32], map: &[u32]) -> Vec<u32> {
+    let mut node_of = vec![u32::MAX; map.len()];
+    for (v, &m) in map.iter().enumerate() {
+        if m != u32::MAX {
+            node_of[m as usize] = v as u32;
+        }
+    }
+    let mut seen = vec![false; map.len()];
+    let mut out = Vec::new();
+    for &d in order {
+        let v = node_of[d as usize / 3];
+        if !seen[v as usize] {
+            seen[v as usize] = true;
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// Part 5 of the module doc: live sets of the dam poured to a half, three
+/// quarters and all of its height, the concrete tied (`LayerMerge`) below
+/// three zones under the top; before them, how far the tied nodes lie off
+/// their chords.
+fn merged_concrete(mesh: &Mesh) -> anyhow::Result<()> {
+    let nn = mesh.nodes.len();
+    let supported = Supports::far_boundary(mesh).flags(nn);
+    let merge = LayerMerge::build(mesh, &supported, 1);
+    let every: Vec<u32> = merge.all().iter().map(|&(v, _)| v).collect();
+    let all = masters_of(&merge, &every, nn);
+    let offs: Vec<f64> = merge
+        .all()
+        .iter()
+        .map(|&(v, t)| {
+            let (lo, hi, x) = (
+                mesh.nodes[t.lo as usize],
+                mesh.nodes[t.hi as usize],
+                mesh.nodes[v as usize],
+            );
+            (0..3)
+                .map(|k| (x[k] - (1.0 - t.w) * lo[k] - t.w * hi[k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    for lim in [0.01, 0.02, 0.05, 0.1, 0.2, 0.5] {
+        println!(
+            "nodes merging may tie within {lim} m of their chords: {} of {}",
+            offs.iter().filter(|&&o| o <= lim).count(),
+            offs.len()
+        );
+    }
+    let identity: Vec<u32> = (0..nn as u32).collect();
+    let fine = metis_nested_dissection(&pattern(mesh, &|_| true, &identity, nn as u32, &[]))?;
+    let fine_nodes = node_sequence(&fine, &identity);
+    let (map_all, n_all) = number(|v| all[v].len() == 1, nn);
+    let merged_order =
+        metis_nested_dissection(&tied_pattern(mesh, &all, &map_all, n_all, &|_| true))?;
+    let merged_nodes = node_sequence(&merged_order, &map_all);
+    // each node that may be tied just before the master eliminated first
+    let mut at = vec![usize::MAX; nn];
+    for (k, &m) in merged_nodes.iter().enumerate() {
+        at[m as usize] = k;
+    }
+    let mut before: Vec<Vec<u32>> = vec![Vec::new(); nn];
+    for (v, t) in merge.all() {
+        let first = if at[t.lo as usize] <= at[t.hi as usize] {
+            t.lo
+        } else {
+            t.hi
+        };
+        before[first as usize].push(v);
+    }
+    let merged_seq: Vec<u32> = merged_nodes
+        .iter()
+        .flat_map(|&m| before[m as usize].iter().copied().chain([m]))
+        .collect();
+    let (zmin, zmax) = (mesh.layer_z[0], mesh.crest_z);
+    let zone = mesh.lift_height * mesh.zone_lifts as f64;
+    let centre = |e: usize| {
+        mesh.elements[e]
+            .iter()
+            .map(|&v| mesh.nodes[v as usize][2])
+            .sum::<f64>()
+            / 8.0
+    };
+    for frac in [0.5, 0.75, 1.0] {
+        let zcut = zmin + frac * (zmax - zmin);
+        let live = |e: usize| mesh.parts[e] == Part::Rock || centre(e) < zcut;
+        let mut node_live = vec![false; nn];
+        for e in (0..mesh.elements.len()).filter(|&e| live(e)) {
+            mesh.elements[e]
+                .iter()
+                .for_each(|&v| node_live[v as usize] = true);
+        }
+        // the top three zones too young to merge
+        let all_live = vec![true; mesh.elements.len()];
+        let birth: Vec<f64> = (0..mesh.elements.len())
+            .map(|e| {
+                if centre(e) < zcut - 3.0 * zone {
+                    0.0
+                } else {
+                    1e9
+                }
+            })
+            .collect();
+        let tied = masters_of(&merge, &merge.tied_at(&all_live, &birth, 1.0), nn);
+        let untied = masters_of(&merge, &[], nn);
+        for (name, m) in [("untied", &untied), ("tied", &tied)] {
+            let (map, n) = number(|v| node_live[v] && m[v].len() == 1, nn);
+            let p = tied_pattern(mesh, m, &map, n, &live);
+            println!(
+                "live below {zcut:.1} m, {name}, {} tied:",
+                (0..nn).filter(|&v| node_live[v] && m[v].len() == 2).count()
+            );
+            report("  its own METIS", p.clone(), Ordering::Metis)?;
+            let dofs_of = |seq: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
+                seq.filter(|&v| map[v as usize] != u32::MAX)
+                    .flat_map(|v| node_dofs(map[v as usize]))
+                    .collect()
+            };
+            report(
+                "  the fine order",
+                p.clone(),
+                Ordering::Custom(dofs_of(&mut fine_nodes.iter().copied())),
+            )?;
+            report(
+                "  the merged order",
+                p,
+                Ordering::Custom(dofs_of(&mut merged_seq.iter().copied())),
+            )?;
+        }
+    }
     Ok(())
 }

@@ -182,6 +182,8 @@ pub struct NextStep {
 pub struct Births {
     /// the elements live after the pours
     pub live: Vec<bool>,
+    /// the nodes layer merging ties then
+    pub merged: Vec<u32>,
     /// the points the pours pair, with the state each starts in
     pub paired: Vec<(usize, JointPointState)>,
     pub sys: LiveSystem,
@@ -472,9 +474,9 @@ impl FactorAhead {
     /// The live system made ahead for the elements `live`, if one was (its
     /// solver holds the next step's factor); None otherwise, and anything
     /// made ahead is forgotten.
-    pub fn adopt(&mut self, live: &[bool]) -> Option<LiveSystem> {
+    pub fn adopt(&mut self, live: &[bool], merged: &[u32]) -> Option<LiveSystem> {
         if let Some(made) = self.ready.as_mut() {
-            if matches!(&made.target, Target::Born(b) if b.live == live) {
+            if matches!(&made.target, Target::Born(b) if b.live == live && b.merged == merged) {
                 if let Target::Born(births) = std::mem::replace(&mut made.target, Target::Adopted) {
                     self.spare = None;
                     return Some(births.sys);

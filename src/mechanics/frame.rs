@@ -20,6 +20,7 @@ use crate::scene::SolidElement;
 use super::ahead::Assembled;
 use super::error::MechError;
 use super::joints::JointPoint;
+use super::layer_merging::LayerMerge;
 use super::live::{ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan};
 use super::rock_condensation::CondensedRock;
 use super::rock_ties::RockTies;
@@ -40,6 +41,8 @@ pub(super) struct Frame {
     pub(super) supported: Vec<bool>,
     /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
     pub(super) ties: RockTies,
+    /// the concrete ties of layer merging (`solver.layer_merging_age_days`)
+    pub(super) merge: LayerMerge,
     /// how each live set's elimination order is chosen
     pub(super) ordering: OrderingPlan,
     /// the rock condensed once per run (`solver.condense_rock`)
@@ -48,17 +51,29 @@ pub(super) struct Frame {
 
 impl Frame {
     /// Numbers and analyses the live system of the elements `live` (the
-    /// joint points `pair_live` paired), with its rock matrix.
+    /// joint points `pair_live` paired, the nodes `merged` tied by layer
+    /// merging), with its rock matrix.
     pub(super) fn live_system(
         &self,
         live: &[bool],
         pair_live: &[bool],
+        merged: &[u32],
     ) -> Result<LiveSystem, LiveError> {
+        let with_merged;
+        let ties = if merged.is_empty() {
+            &self.ties
+        } else {
+            let extra = merged
+                .iter()
+                .filter_map(|&v| self.merge.tie_of(v).map(|t| (v, t)));
+            with_merged = self.ties.with(extra, self.n_nodes);
+            &with_merged
+        };
         let elements = ElementSet {
             conn: &self.elements,
             live,
             k_unit: &self.tables.k_unit,
-            ties: &self.ties,
+            ties,
             rock: self.rock.as_ref(),
         };
         let mut sys = LiveSystem::build(

@@ -47,6 +47,7 @@ use crate::fem::{
 };
 
 use super::joints::JointPoint;
+use super::layer_merging::LayerMerge;
 use super::rock_condensation::CondensedRock;
 use super::rock_ties::{RockTies, Tie};
 
@@ -603,12 +604,15 @@ pub struct ConstructionOrdering {
 
 impl ConstructionOrdering {
     /// METIS on the complete dam of `conn` with all of `points` paired and
-    /// the nodes `ties` ties tied.
+    /// the nodes `ties` ties tied, and those `merge` may tie tied too; a
+    /// node merging may tie comes just before the first of its masters
+    /// (measured in [`super::layer_merging`]).
     pub fn new(
         conn: &[[u32; 8]],
         points: &[JointPoint],
         n_nodes: usize,
         ties: &RockTies,
+        merge: &LayerMerge,
     ) -> Result<ConstructionOrdering, LiveError> {
         let t = Instant::now();
         let mut point_of_b = vec![NONE; n_nodes];
@@ -624,19 +628,29 @@ impl ConstructionOrdering {
             .map(|p| node_used[p.a as usize] && node_used[p.b as usize])
             .collect();
         let all = vec![true; conn.len()];
+        let merged = merge.all();
+        let ties = ties.with(merged.iter().copied(), n_nodes);
         let elements = ElementSet {
             conn,
             live: &all,
             k_unit: &[],
-            ties,
+            ties: &ties,
             rock: None,
         };
         let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
         let fwd = metis_nested_dissection(&complete.pattern())?;
         let keys = complete.keys(&point_of_b);
+        // even ranks are free for the nodes merging may tie: each is
+        // eliminated with the master outside the separator the other is in
         let mut rank = vec![NONE; 3 * (n_nodes + points.len())];
         for (k, &d) in fwd.iter().enumerate() {
-            rank[keys[d as usize] as usize] = k as u32;
+            rank[keys[d as usize] as usize] = 2 * k as u32 + 1;
+        }
+        for &(v, tie) in &merged {
+            for c in 0..3 {
+                let (lo, hi) = (rank[3 * tie.lo as usize + c], rank[3 * tie.hi as usize + c]);
+                rank[3 * v as usize + c] = lo.min(hi) - 1;
+            }
         }
         Ok(ConstructionOrdering {
             rank,

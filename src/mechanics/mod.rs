@@ -40,6 +40,7 @@ mod error;
 mod frame;
 pub mod grout_stops;
 pub mod joints;
+pub mod layer_merging;
 pub mod live;
 pub mod model;
 pub mod rock_condensation;

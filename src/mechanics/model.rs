@@ -26,6 +26,7 @@ use super::error::RESIDUAL_TOLERANCE;
 use super::frame::{ElementTables, Frame};
 use super::grout_stops::{inside_grout_stops, StopSample};
 use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
+use super::layer_merging::LayerMerge;
 use super::live::{ConstructionOrdering, LiveError, LiveSystem, OrderingPlan, NONE};
 use super::rock_condensation::{CondensedRock, RockElements};
 use super::rock_ties::RockTies;
@@ -268,6 +269,8 @@ pub struct MechanicsModel {
     /// a restored state's [`MechState::next_factor_guess`], for the first
     /// step after the restore
     restored_guess: Option<FactorGuess>,
+    /// the nodes layer merging ties in the live system (sorted)
+    merged: Vec<u32>,
 }
 
 impl MechState {
@@ -361,11 +364,14 @@ impl MechanicsModel {
             &supported,
             settings.rock_coarsening,
         );
-        // the mechanics' rock is the tied one, its tied nodes on their chords
+        let merge = LayerMerge::build(mesh, &supported, settings.layer_merging_age_days);
+        // the mechanics' rock is the tied one and its concrete the one
+        // merging ties, the nodes tied on their chords
         let straightened;
-        let mesh = if ties.count() > 0 {
+        let mesh = if ties.count() > 0 || !merge.is_empty() {
             let mut m = mesh.clone();
             ties.straighten(&mut m.nodes);
+            merge.straighten(&mut m.nodes);
             straightened = m;
             &straightened
         } else {
@@ -385,8 +391,14 @@ impl MechanicsModel {
             OrderingKind::Amd => OrderingPlan::Amd,
             OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
             OrderingKind::Metis => {
-                let c = ConstructionOrdering::new(&mesh.elements, &points, mesh.nodes.len(), &ties)
-                    .map_err(|source| MechError::Live { day: 0.0, source })?;
+                let c = ConstructionOrdering::new(
+                    &mesh.elements,
+                    &points,
+                    mesh.nodes.len(),
+                    &ties,
+                    &merge,
+                )
+                .map_err(|source| MechError::Live { day: 0.0, source })?;
                 stats.metis_calls += 1;
                 stats.seconds_ordering += c.seconds;
                 OrderingPlan::Construction(std::sync::Arc::new(c))
@@ -426,6 +438,7 @@ impl MechanicsModel {
             stats,
             ahead: FactorAhead::new(factor_ahead(settings)),
             restored_guess: None,
+            merged: Vec::new(),
             frame: Arc::new(Frame {
                 tables,
                 concrete: settings.concrete.clone(),
@@ -435,6 +448,7 @@ impl MechanicsModel {
                 points,
                 supported,
                 ties,
+                merge,
                 ordering,
                 rock: rock.map(|(r, _)| Arc::new(r)),
             }),
@@ -500,18 +514,19 @@ impl MechanicsModel {
     /// pattern, or adopts the live system made ahead for these elements;
     /// pairs whose second node has just been born start open with the
     /// scene's initial gap.
-    fn rebuild(&mut self) -> Result<(), LiveError> {
+    fn rebuild(&mut self, merged: Vec<u32>) -> Result<(), LiveError> {
         let pair_live = self.pair_live(&self.state.live);
         for (p, st) in self.newly_paired(&pair_live) {
             self.state.joints[p] = st;
         }
-        self.sys = match self.ahead.adopt(&self.state.live) {
+        self.sys = match self.ahead.adopt(&self.state.live, &merged) {
             Some(sys) => sys,
             None => {
                 let live = self.state.live.clone();
-                self.build_live(&live, &pair_live)?
+                self.build_live(&live, &pair_live, &merged)?
             }
         };
+        self.merged = merged;
         self.dirty = false;
         Ok(())
     }
@@ -559,9 +574,14 @@ impl MechanicsModel {
     }
 
     /// Numbers and analyses the live system of the elements `live`, counted.
-    fn build_live(&mut self, live: &[bool], pair_live: &[bool]) -> Result<LiveSystem, LiveError> {
+    fn build_live(
+        &mut self,
+        live: &[bool],
+        pair_live: &[bool],
+        merged: &[u32],
+    ) -> Result<LiveSystem, LiveError> {
         let t = Instant::now();
-        let sys = self.frame.live_system(live, pair_live)?;
+        let sys = self.frame.live_system(live, pair_live, merged)?;
         self.stats.count_live(&sys);
         self.stats.seconds_symbolic += t.elapsed().as_secs_f64();
         Ok(sys)
@@ -667,6 +687,14 @@ impl MechanicsModel {
         temps: Option<(&[f64], &[f64])>,
         water_level: Option<f64>,
     ) -> Result<(), MechError> {
+        // layer merging ties more nodes from today: a new live system
+        let merged = self
+            .frame
+            .merge
+            .tied_at(&self.state.live, &self.state.birth_day, t0);
+        if merged != self.merged {
+            self.dirty = true;
+        }
         // The next step's order is made before this step waits for its own
         // factor (still being made on the other core), so that the other
         // core starts the next as soon as it is free: it idled 21.8 s of
@@ -681,7 +709,7 @@ impl MechanicsModel {
         // what was made ahead is this step's (or discarded by it)
         self.settle_ahead();
         if self.dirty {
-            self.rebuild()
+            self.rebuild(merged)
                 .map_err(|source| MechError::Live { day: t1, source })?;
         }
         let t_asm = Instant::now();
@@ -772,7 +800,13 @@ impl MechanicsModel {
         let t_asm = Instant::now();
         let symbolic_before = self.stats.seconds_symbolic;
         let (t0, t1) = next.interval;
-        let order = if next.pours.is_empty() {
+        let same_merged = next.pours.is_empty()
+            && self
+                .frame
+                .merge
+                .tied_at(&self.state.live, &self.state.birth_day, t0)
+                == self.merged;
+        let order = if same_merged {
             let (sys, birth) = (&self.sys, &self.state.birth_day);
             self.frame
                 .stiffness(sys, birth, t0, t1)
@@ -807,7 +841,8 @@ impl MechanicsModel {
                 birth[e as usize] = t0;
             }
         }
-        if live == self.state.live {
+        let merged = self.frame.merge.tied_at(&live, &birth, t0);
+        if live == self.state.live && merged == self.merged {
             return None;
         }
         let pair_live = self.pair_live(&live);
@@ -819,11 +854,16 @@ impl MechanicsModel {
         let frame = Arc::clone(&self.frame);
         let guess = states.clone();
         let work = move || {
-            let sys = frame.live_system(&live, &pair_live).ok()?;
+            let sys = frame.live_system(&live, &pair_live, &merged).ok()?;
             let assembled = frame.stiffness(&sys, &birth, t0, t1).ok()?;
             let prepared = Prepared::first_pass(&assembled.stiffness, &sys, &guess);
             Some(Analysed {
-                births: Births { live, paired, sys },
+                births: Births {
+                    live,
+                    merged,
+                    paired,
+                    sys,
+                },
                 assembled,
                 prepared,
                 seconds: 0.0,

@@ -144,22 +144,9 @@ impl RockTies {
                 c.iter().for_each(|&v| kept[v as usize] = true);
             }
         }
-        let (above, below) = vertical_links(elements, parts, nodes);
+        let (above, below) = vertical_links(elements, nodes, &is_rock);
         let supports = |v: u32| &supported[3 * v as usize..3 * v as usize + 3];
-        let linked = |x: u32| x != NONE && x != CONFLICT;
-        for foot in 0..nn as u32 {
-            if !linked(above[foot as usize]) || linked(below[foot as usize]) {
-                continue;
-            }
-            let mut line = vec![foot];
-            loop {
-                let last = *line.last().unwrap_or(&foot);
-                let next = above[last as usize];
-                if !linked(next) || below[next as usize] != last {
-                    break;
-                }
-                line.push(next);
-            }
+        for line in vertical_lines(&above, &below) {
             let start = line
                 .iter()
                 .position(|&v| nodes[v as usize][2] >= foundation)
@@ -181,39 +168,93 @@ impl RockTies {
         ties
     }
 
-    /// Ties the nodes of `line` between its kept ones, by distance along it.
+    /// Ties the nodes of `line` between its kept ones ([`ties_along`]).
     fn tie_line(&mut self, line: &[u32], keep: &[bool], nodes: &[[f64; 3]]) {
-        let mut s = vec![0.0; line.len()];
-        for k in 1..line.len() {
-            let (a, b) = (nodes[line[k - 1] as usize], nodes[line[k] as usize]);
-            let d = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
-            s[k] = s[k - 1] + d;
+        for (v, tie) in ties_along(line, keep, nodes) {
+            self.tie[v as usize] = Some(tie);
+            self.tied += 1;
         }
-        let mut lo = 0;
-        for hi in 1..line.len() {
-            if !keep[hi] {
-                continue;
-            }
-            for k in lo + 1..hi {
-                self.tie[line[k] as usize] = Some(Tie {
-                    lo: line[lo],
-                    hi: line[hi],
-                    w: (s[k] - s[lo]) / (s[hi] - s[lo]),
-                });
-                self.tied += 1;
-            }
-            lo = hi;
+    }
+
+    /// These ties and `extra` (nodes these leave free), over `n_nodes` nodes.
+    pub fn with(&self, extra: impl Iterator<Item = (u32, Tie)>, n_nodes: usize) -> RockTies {
+        let mut out = self.clone();
+        if out.tie.is_empty() {
+            out.tie = vec![None; n_nodes];
         }
+        for (v, tie) in extra {
+            debug_assert!(out.tie[v as usize].is_none());
+            out.tie[v as usize] = Some(tie);
+            out.tied += 1;
+        }
+        out
     }
 }
 
+/// The ties of the nodes of `line` between its kept ones (`keep`), each to
+/// the kept nodes below and above it, linearly in the distance along the line.
+pub(super) fn ties_along(line: &[u32], keep: &[bool], nodes: &[[f64; 3]]) -> Vec<(u32, Tie)> {
+    let mut s = vec![0.0; line.len()];
+    for k in 1..line.len() {
+        let (a, b) = (nodes[line[k - 1] as usize], nodes[line[k] as usize]);
+        let d = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt();
+        s[k] = s[k - 1] + d;
+    }
+    let mut out = Vec::new();
+    let mut lo = 0;
+    for hi in 1..line.len() {
+        if !keep[hi] {
+            continue;
+        }
+        for k in lo + 1..hi {
+            let w = (s[k] - s[lo]) / (s[hi] - s[lo]);
+            out.push((
+                line[k],
+                Tie {
+                    lo: line[lo],
+                    hi: line[hi],
+                    w,
+                },
+            ));
+        }
+        lo = hi;
+    }
+    out
+}
+
+/// Whether a link of [`vertical_links`] leads to a node.
+pub(super) fn linked(x: u32) -> bool {
+    x != NONE && x != CONFLICT
+}
+
+/// The chains of [`vertical_links`], each from its foot up.
+pub(super) fn vertical_lines(above: &[u32], below: &[u32]) -> Vec<Vec<u32>> {
+    let mut lines = Vec::new();
+    for foot in 0..above.len() as u32 {
+        if !linked(above[foot as usize]) || linked(below[foot as usize]) {
+            continue;
+        }
+        let mut line = vec![foot];
+        loop {
+            let last = *line.last().unwrap_or(&foot);
+            let next = above[last as usize];
+            if !linked(next) || below[next as usize] != last {
+                break;
+            }
+            line.push(next);
+        }
+        lines.push(line);
+    }
+    lines
+}
+
 /// Each node's neighbour above and below along the vertical edges of the
-/// rock hexes (local node k below k + 4): NONE without one, CONFLICT where
-/// two elements disagree or the edge does not rise.
-fn vertical_links(
+/// hexes `of` selects (local node k below k + 4): NONE without one,
+/// CONFLICT where two elements disagree or the edge does not rise.
+pub(super) fn vertical_links(
     elements: &[[u32; 8]],
-    parts: &[Part],
     nodes: &[[f64; 3]],
+    of: &dyn Fn(usize) -> bool,
 ) -> (Vec<u32>, Vec<u32>) {
     let nn = nodes.len();
     let (mut above, mut below) = (vec![NONE; nn], vec![NONE; nn]);
@@ -225,7 +266,7 @@ fn vertical_links(
         };
     };
     for (e, c) in elements.iter().enumerate() {
-        if parts[e] != Part::Rock {
+        if !of(e) {
             continue;
         }
         for k in 0..4 {

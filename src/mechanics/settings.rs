@@ -107,6 +107,9 @@ pub struct MechanicsSettings {
     /// Condense the rock no step changes once per run
     /// (`solver.condense_rock`; [`super::rock_condensation`]).
     pub condense_rock: bool,
+    /// Tie the concrete between the zone boundaries once this many days
+    /// old (`solver.layer_merging_age_days`; 0: off; [`super::layer_merging`]).
+    pub layer_merging_age_days: u32,
 }
 
 impl MechanicsSettings {
@@ -168,6 +171,7 @@ impl MechanicsSettings {
             factor_ahead: scene.solver.factor_ahead,
             rock_coarsening: scene.solver.rock_coarsening,
             condense_rock: scene.solver.condense_rock,
+            layer_merging_age_days: scene.solver.layer_merging_age_days,
         })
     }
 }

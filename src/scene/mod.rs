@@ -530,6 +530,19 @@ pub struct SolverSettings {
     /// fingerprints of older scenes).
     #[serde(skip_serializing_if = "is_true")]
     pub condense_rock: bool,
+    /// Mechanics: once every lift round a segment of a vertical grid line
+    /// of the concrete (off the joints) between two grouting-zone
+    /// boundaries is this many days old, tie its nodes to the segment's
+    /// ends, linearly (Zhu's layer merging, kept element by element;
+    /// [`crate::mechanics::layer_merging`]). 0 (default): off. An
+    /// approximation: its error and time are in `groutready study
+    /// accuracy`. Not written when 0 (restart fingerprints).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub layer_merging_age_days: u32,
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
 }
 
 fn is_one(v: &u32) -> bool {
@@ -618,6 +631,7 @@ impl Default for SolverSettings {
             factor_ahead: true,
             rock_coarsening: 1,
             condense_rock: true,
+            layer_merging_age_days: 0,
         }
     }
 }

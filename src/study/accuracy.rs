@@ -792,6 +792,14 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
                 |s| s.solver.rock_coarsening = 4,
             ));
         }
+        if scene.solver.layer_merging_age_days == 0 {
+            l.push(Setting::new(
+                "layer merging 60 d",
+                "layer merging",
+                None,
+                |s| s.solver.layer_merging_age_days = 60,
+            ));
+        }
     }
     let mut probe = scene.clone();
     let blocks = refine_mesh(&mut probe, 1.0, 1.0, 2);

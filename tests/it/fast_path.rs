@@ -31,11 +31,21 @@ fn run(
     condense_rock: bool,
     mechanics_step_days: u32,
 ) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
+    run_with(capacitance, condense_rock, mechanics_step_days, 0)
+}
+
+fn run_with(
+    capacitance: bool,
+    condense_rock: bool,
+    mechanics_step_days: u32,
+    layer_merging_age_days: u32,
+) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut inputs = app::load_inputs(&root.join("models/small_dam_joints.toml"), None).unwrap();
     inputs.scene.solver.contact_capacitance = capacitance;
     inputs.scene.solver.condense_rock = condense_rock;
     inputs.scene.time.mechanics_max_step_days = mechanics_step_days;
+    inputs.scene.solver.layer_merging_age_days = layer_merging_age_days;
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
     let stats = sim.run(None, &mut |_, _| {}).unwrap();
     let dates = inputs
@@ -177,7 +187,13 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
         long_stats.steps < exact_stats.steps,
         "longer steps are fewer"
     );
-    assert!(largest <= LONG_STEP_BOUND_M, "{:.4} mm", 1e3 * largest);
+    assert_measured(largest, LONG_STEP_BOUND_M);
+}
+
+/// An approximation's difference `largest` [m]: within its measured
+/// `bound`, and not zero (it changes the answer, so it is measured).
+fn assert_measured(largest: f64, bound: f64) {
+    assert!(largest <= bound, "{:.4} mm", 1e3 * largest);
     assert!(
         largest > 0.0,
         "the approximation changes the answer: it is measured"
@@ -193,3 +209,46 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
 /// the exact path deserves its own convergence study (issue 13). This bound
 /// keeps the figure from growing unnoticed.
 const LONG_STEP_BOUND_M: f64 = 0.7e-3;
+
+/// Layer merging (an opt-in approximation, `mechanics::layer_merging`)
+/// against the defaults it is added to, on the small dam: fewer unknowns,
+/// the apertures at the grouting dates within a measured bound.
+#[test]
+fn layer_merging_against_the_untied_run_at_the_grouting_dates() {
+    let (untied, untied_stats, dates) = run(true, true, 1);
+    let (merged, merged_stats, _) = run_with(true, true, 1, MERGING_AGE_DAYS);
+    // never old enough within the run: the blocks' grid lines are straight,
+    // so nothing moves and nothing is tied; only the elimination order is
+    // the merged dam's, so the answer is the same to the contact
+    // iteration's tolerance (as the condensed rock's above: 4.6e-6 mm)
+    let (never, never_stats, _) = run_with(true, true, 1, 100_000);
+    let (_, largest, _) = at_grouting_dates(&never, &untied, &dates);
+    assert!(largest <= 1e-8, "{:.3e} mm", 1e3 * largest);
+    assert_eq!(never_stats.max_dofs, untied_stats.max_dofs, "nothing tied");
+    assert!(merged_stats.max_dofs < untied_stats.max_dofs, "nodes tied");
+    let (compared, largest, differ) = at_grouting_dates(&merged, &untied, &dates);
+    eprintln!(
+        "layer merging after {MERGING_AGE_DAYS} d: {compared} zone samples at their grouting dates: apertures differ by at most {:.4} mm, \
+         {differ} states differ; {:.2} against {:.2} Gflop of factorisation, {} against {} symbolic analyses",
+        1e3 * largest,
+        merged_stats.numeric_flops / 1e9,
+        untied_stats.numeric_flops / 1e9,
+        merged_stats.symbolic,
+        untied_stats.symbolic
+    );
+    assert!(
+        merged_stats.numeric_flops < untied_stats.numeric_flops,
+        "merging makes the factorisations smaller"
+    );
+    assert_measured(largest, MERGING_BOUND_M);
+}
+
+const MERGING_AGE_DAYS: u32 = 60;
+/// What merging after 60 days may cost at the grouting dates of the small
+/// dam. Measured 0.451 mm (28 Nov 2026; 60.7 against 75.4 Gflop of
+/// factorisation): the blocks' grid lines are straight, so this is the
+/// tie's own error, the stage-2 cooling of 60-day-old concrete not being
+/// linear over a zone's height. Far above the 0.01 mm the planner can
+/// ignore, which is why the setting is off by default; this bound keeps
+/// the figure from growing unnoticed.
+const MERGING_BOUND_M: f64 = 0.6e-3;

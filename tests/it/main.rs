@@ -23,6 +23,7 @@ mod joint_friction;
 mod joint_grout_stops;
 mod joint_grouting;
 mod joint_two_blocks;
+mod layer_merging;
 mod material_creep;
 mod material_laws;
 mod mechanics_staged;

@@ -12,20 +12,11 @@
 //!   most the untied one's (and close to it), its folded equilibrium
 //!   residual round-off, and it has three unknowns fewer per tied node.
 
-use crate::common::repo;
 use groutready::mechanics::rock_ties::RockTies;
 use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::{Mesh, Part};
 
-fn demo() -> (Mesh, MechanicsSettings) {
-    let inputs = groutready::app::load_inputs(&repo("models/demo_arch.toml"), None).unwrap();
-    let settings = MechanicsSettings::from_scene(&inputs.scene).unwrap();
-    (inputs.mesh, settings)
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
+use crate::common::{demo_mechanics as demo, dist};
 
 #[test]
 fn ties_keep_the_concrete_its_ring_the_deep_rock_and_the_support_changes() {
@@ -125,27 +116,9 @@ fn poured(mesh: &Mesh, settings: &MechanicsSettings, supports: &Supports) -> Mec
 #[test]
 fn a_free_expansion_is_linear_so_the_tied_rock_gives_it_exactly() {
     let (mesh, mut settings) = demo();
-    settings.joints = false;
-    settings.self_weight = false;
-    settings.reservoir_load = false;
-    settings.concrete.creep = None;
-    let alpha = settings.concrete.expansion_per_c;
-    settings.rock.as_mut().unwrap().expansion_per_c = alpha;
+    let alpha = crate::common::thermal_strain_only(&mut settings);
     // 3-2-1 supports on three base nodes, moved with the free field
-    let base = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
-    let mut on_base: Vec<u32> = (0..mesh.nodes.len() as u32)
-        .filter(|&v| mesh.nodes[v as usize][2] == base)
-        .collect();
-    on_base.sort_by(|&a, &b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]));
-    let (a, b) = (on_base[0], on_base[on_base.len() - 1]);
-    let c = *on_base
-        .iter()
-        .max_by(|&&p, &&q| mesh.nodes[p as usize][1].total_cmp(&mesh.nodes[q as usize][1]))
-        .unwrap();
-    let fixed = vec![(a, 0), (a, 1), (a, 2), (b, 1), (b, 2), (c, 2)];
-    let supports = Supports {
-        fixed: fixed.clone(),
-    };
+    let (supports, fixed, a) = crate::common::base_three_two_one(&mesh);
     let dt = 10.0;
     let xa = mesh.nodes[a as usize];
     let supported = supports.flags(mesh.nodes.len());
@@ -166,17 +139,7 @@ fn a_free_expansion_is_linear_so_the_tied_rock_gives_it_exactly() {
         );
         m.step(1.0, 2.0, Some((&t0, &t1)), None).unwrap();
         let scale = alpha * dt * 300.0;
-        let worst_u = (0..mesh.nodes.len())
-            .flat_map(|v| (0..3).map(move |k| (v, k)))
-            .map(|(v, k)| (m.state.u[3 * v + k] - want(v, k)).abs())
-            .fold(0.0, f64::max);
-        let worst_s = m
-            .state
-            .stress
-            .iter()
-            .flat_map(|s| s.iter().flatten())
-            .map(|v| v.abs())
-            .fold(0.0, f64::max);
+        let (worst_u, worst_s) = crate::common::misfit_and_stress(&m, mesh.nodes.len(), want);
         eprintln!(
             "free expansion, every {every}: {} unknowns, displacement off by {worst_u:.1e} m, stress {worst_s:.1e} Pa",
             m.live_dofs()

@@ -339,3 +339,71 @@ pub fn set_joints(sc: &mut Scene, text: &str) {
     let j: toml::Table = toml::from_str(&format!("[joints]\n{text}")).unwrap();
     sc.joints = j["joints"].clone().try_into().unwrap();
 }
+
+/// Statically determinate 3-2-1 supports on three nodes of the mesh's
+/// base (the two ends along x, the one farthest along y): the supports,
+/// their (node, component) list, and the first node (the field's origin).
+pub fn base_three_two_one(mesh: &Mesh) -> (groutready::mechanics::Supports, Vec<(u32, u8)>, u32) {
+    let base = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
+    let mut on_base: Vec<u32> = (0..mesh.nodes.len() as u32)
+        .filter(|&v| mesh.nodes[v as usize][2] == base)
+        .collect();
+    on_base.sort_by(|&a, &b| mesh.nodes[a as usize][0].total_cmp(&mesh.nodes[b as usize][0]));
+    let (a, b) = (on_base[0], on_base[on_base.len() - 1]);
+    let c = *on_base
+        .iter()
+        .max_by(|&&p, &&q| mesh.nodes[p as usize][1].total_cmp(&mesh.nodes[q as usize][1]))
+        .unwrap();
+    let fixed = vec![(a, 0), (a, 1), (a, 2), (b, 1), (b, 2), (c, 2)];
+    let supports = groutready::mechanics::Supports {
+        fixed: fixed.clone(),
+    };
+    (supports, fixed, a)
+}
+
+/// The largest displacement off `want(node, component)` [m] and the
+/// largest stress component [Pa] of a model's accumulated state.
+pub fn misfit_and_stress(
+    m: &groutready::mechanics::MechanicsModel,
+    n_nodes: usize,
+    want: impl Fn(usize, usize) -> f64,
+) -> (f64, f64) {
+    let worst_u = (0..n_nodes)
+        .flat_map(|v| (0..3).map(move |k| (v, k)))
+        .map(|(v, k)| (m.state.u[3 * v + k] - want(v, k)).abs())
+        .fold(0.0, f64::max);
+    let worst_s = m
+        .state
+        .stress
+        .iter()
+        .flat_map(|s| s.iter().flatten())
+        .map(|v| v.abs())
+        .fold(0.0, f64::max);
+    (worst_u, worst_s)
+}
+
+/// The demo arch's mesh and mechanics settings.
+pub fn demo_mechanics() -> (Mesh, groutready::mechanics::MechanicsSettings) {
+    let inputs = groutready::app::load_inputs(&repo("models/demo_arch.toml"), None).unwrap();
+    let settings = groutready::mechanics::MechanicsSettings::from_scene(&inputs.scene).unwrap();
+    (inputs.mesh, settings)
+}
+
+/// Distance between two points [m].
+pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Mechanics of a free thermal expansion: no joints, weight, water or
+/// creep, and the rock expanding as the concrete does; returns that α.
+pub fn thermal_strain_only(settings: &mut groutready::mechanics::MechanicsSettings) -> f64 {
+    settings.joints = false;
+    settings.self_weight = false;
+    settings.reservoir_load = false;
+    settings.concrete.creep = None;
+    let alpha = settings.concrete.expansion_per_c;
+    if let Some(rock) = settings.rock.as_mut() {
+        rock.expansion_per_c = alpha;
+    }
+    alpha
+}
