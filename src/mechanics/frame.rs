@@ -23,7 +23,7 @@ use super::joints::JointPoint;
 use super::layer_merging::LayerMerge;
 use super::live::{ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan};
 use super::rock_condensation::CondensedRock;
-use super::rock_ties::RockTies;
+use super::rock_ties::Ties;
 use super::settings::{ConcreteMechanics, MechanicsSettings};
 
 /// The unchanging parts of a mechanical model.
@@ -40,7 +40,7 @@ pub(super) struct Frame {
     /// per global dof: held by a support
     pub(super) supported: Vec<bool>,
     /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
-    pub(super) ties: RockTies,
+    pub(super) ties: Ties,
     /// the concrete ties of layer merging (`solver.layer_merging_age_days`)
     pub(super) merge: LayerMerge,
     /// how each live set's elimination order is chosen

@@ -49,7 +49,7 @@ use crate::fem::{
 use super::joints::JointPoint;
 use super::layer_merging::LayerMerge;
 use super::rock_condensation::CondensedRock;
-use super::rock_ties::{RockTies, Tie};
+use super::rock_ties::{Tie, Ties};
 
 /// Marks a dof without an unknown.
 pub const NONE: u32 = u32::MAX;
@@ -175,7 +175,7 @@ pub struct ElementSet<'a> {
     pub conn: &'a [[u32; 8]],
     pub live: &'a [bool],
     pub k_unit: &'a [Mat24],
-    pub ties: &'a RockTies,
+    pub ties: &'a Ties,
     /// the rock to condense, when every one of its unknowns is live
     pub rock: Option<&'a Arc<CondensedRock>>,
 }
@@ -189,7 +189,7 @@ impl LiveSystem {
             conn: &[],
             live: &[],
             k_unit: &[],
-            ties: &RockTies::none(),
+            ties: &Ties::none(),
             rock: None,
         };
         LiveSystem::build(none, points, &no_pair, &[], n_nodes, &OrderingPlan::Amd)
@@ -611,7 +611,7 @@ impl ConstructionOrdering {
         conn: &[[u32; 8]],
         points: &[JointPoint],
         n_nodes: usize,
-        ties: &RockTies,
+        ties: &Ties,
         merge: &LayerMerge,
     ) -> Result<ConstructionOrdering, LiveError> {
         let t = Instant::now();
@@ -676,7 +676,7 @@ impl ConstructionOrdering {
             conn,
             live: &all,
             k_unit: &[],
-            ties: &RockTies::none(),
+            ties: &Ties::none(),
             rock: None,
         };
         let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
@@ -862,7 +862,7 @@ impl Numbering {
 struct Links<'a> {
     pair_of_b: &'a [u32],
     points: &'a [JointPoint],
-    ties: &'a RockTies,
+    ties: &'a Ties,
     n_nodes: u32,
 }
 

@@ -29,7 +29,7 @@ use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState
 use super::layer_merging::LayerMerge;
 use super::live::{ConstructionOrdering, LiveError, LiveSystem, OrderingPlan, NONE};
 use super::rock_condensation::{CondensedRock, RockElements};
-use super::rock_ties::RockTies;
+use super::rock_ties::Ties;
 use super::settings::{JointMechanics, MechanicsSettings};
 
 /// Gravity [m/s²].
@@ -357,7 +357,7 @@ impl MechanicsModel {
         supports: &Supports,
     ) -> Result<MechanicsModel, MechError> {
         let supported = supports.flags(mesh.nodes.len());
-        let ties = RockTies::build(
+        let ties = Ties::build(
             &mesh.elements,
             &mesh.parts,
             &mesh.nodes,
@@ -1452,7 +1452,7 @@ fn condensed_rock(
     ordering: &OrderingPlan,
     points: &[JointPoint],
     supported: &[bool],
-    ties: &RockTies,
+    ties: &Ties,
 ) -> Result<Option<(CondensedRock, f64)>, MechError> {
     let OrderingPlan::Construction(c) = ordering else {
         return Ok(None);

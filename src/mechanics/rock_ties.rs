@@ -30,7 +30,7 @@
 //! after the arch's rings: the tied nodes are 0.06 m at most off the chord
 //! between their masters on the demo, 0.32 m over a 20 m span on the
 //! Xiaowan-like arch), so the mechanics moves each tied node onto that
-//! chord ([`RockTies::straighten`]): the rock between two kept levels is
+//! chord ([`Ties::straighten`]): the rock between two kept levels is
 //! then a stack of hexes on straight lines, and a displacement linear in
 //! space is one the tie can take exactly.
 //!
@@ -68,9 +68,11 @@ impl Tie {
     }
 }
 
-/// The tie of every node (none for a kept node).
+/// The tie of every node (none for a node with unknowns of its own): the
+/// rock's ([`Ties::build`]) and, in a live system, those layer merging
+/// has switched on ([`Ties::with`], [`super::layer_merging`]).
 #[derive(Debug, Clone, Default)]
-pub struct RockTies {
+pub struct Ties {
     /// per node; empty when nothing is tied
     tie: Vec<Option<Tie>>,
     tied: usize,
@@ -80,10 +82,10 @@ const NONE: u32 = u32::MAX;
 /// More than one element gives a node a different neighbour along its line.
 const CONFLICT: u32 = u32::MAX - 1;
 
-impl RockTies {
+impl Ties {
     /// Nothing tied (`rock_coarsening = 1`).
-    pub fn none() -> RockTies {
-        RockTies::default()
+    pub fn none() -> Ties {
+        Ties::default()
     }
 
     /// The tie of `node`, if it is tied.
@@ -109,7 +111,7 @@ impl RockTies {
         }
     }
 
-    /// The ties of a mesh keeping every `every`-th level (module doc);
+    /// The rock's ties of a mesh keeping every `every`-th level (module doc);
     /// `supported[3v + c]` marks fixed node dofs.
     pub fn build(
         elements: &[[u32; 8]],
@@ -117,12 +119,12 @@ impl RockTies {
         nodes: &[[f64; 3]],
         supported: &[bool],
         every: u32,
-    ) -> RockTies {
+    ) -> Ties {
         if every <= 1 {
-            return RockTies::none();
+            return Ties::none();
         }
         let nn = nodes.len();
-        let mut ties = RockTies {
+        let mut ties = Ties {
             tie: vec![None; nn],
             tied: 0,
         };
@@ -136,7 +138,7 @@ impl RockTies {
             .map(|v| nodes[v][2])
             .min_by(f64::total_cmp)
         else {
-            return RockTies::none();
+            return Ties::none();
         };
         let mut kept = concrete.clone();
         for (_, c) in elements.iter().enumerate().filter(|&(e, _)| is_rock(e)) {
@@ -177,7 +179,7 @@ impl RockTies {
     }
 
     /// These ties and `extra` (nodes these leave free), over `n_nodes` nodes.
-    pub fn with(&self, extra: impl Iterator<Item = (u32, Tie)>, n_nodes: usize) -> RockTies {
+    pub fn with(&self, extra: impl Iterator<Item = (u32, Tie)>, n_nodes: usize) -> Ties {
         let mut out = self.clone();
         if out.tie.is_empty() {
             out.tie = vec![None; n_nodes];

@@ -12,7 +12,7 @@
 //!   most the untied one's (and close to it), its folded equilibrium
 //!   residual round-off, and it has three unknowns fewer per tied node.
 
-use groutready::mechanics::rock_ties::RockTies;
+use groutready::mechanics::rock_ties::Ties;
 use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::{Mesh, Part};
 
@@ -23,10 +23,10 @@ fn ties_keep_the_concrete_its_ring_the_deep_rock_and_the_support_changes() {
     let (mesh, _) = demo();
     let supported = Supports::far_boundary(&mesh).flags(mesh.nodes.len());
     assert_eq!(
-        RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, 1).count(),
+        Ties::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, 1).count(),
         0
     );
-    let ties = RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, 4);
+    let ties = Ties::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, 4);
     let nn = mesh.nodes.len();
     let mut near = vec![false; nn];
     let concrete = |e: usize| mesh.parts[e] != Part::Rock;
@@ -126,8 +126,7 @@ fn a_free_expansion_is_linear_so_the_tied_rock_gives_it_exactly() {
         settings.rock_coarsening = every;
         // the field at the mechanics' positions: tied nodes on their chords
         let mut x = mesh.nodes.clone();
-        RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, every)
-            .straighten(&mut x);
+        Ties::build(&mesh.elements, &mesh.parts, &mesh.nodes, &supported, every).straighten(&mut x);
         let want = |v: usize, k: usize| alpha * dt * (x[v][k] - xa[k]);
         let mut m = poured(&mesh, &settings, &supports);
         for &(n, k) in &fixed {
@@ -165,7 +164,7 @@ fn the_tied_rock_is_a_ritz_subspace_a_little_stiffer_under_self_weight() {
     // so that the tied displacements are a subspace of the untied ones
     let tied_nodes = {
         let s = supports.flags(mesh.nodes.len());
-        let ties = RockTies::build(&mesh.elements, &mesh.parts, &mesh.nodes, &s, 4);
+        let ties = Ties::build(&mesh.elements, &mesh.parts, &mesh.nodes, &s, 4);
         ties.straighten(&mut mesh.nodes);
         ties.count()
     };
