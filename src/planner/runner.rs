@@ -5,6 +5,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 use std::sync::OnceLock;
 
+use crate::mechanics::MechanicsModel;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::Schedules;
@@ -31,6 +32,11 @@ pub struct Runner<'a> {
     /// the scene with its thermal effects alone, made on first use
     /// ([`Runner::simulate_temperatures`])
     thermal_scene: OnceLock<Scene>,
+    /// the scene's mechanical model before its first pour, which every
+    /// re-simulation with mechanics starts from a copy of
+    /// ([`MechanicsModel::fresh`]): the baseline's, or the first
+    /// re-simulation's when the runner was made from a run folder
+    blank: OnceLock<MechanicsModel>,
 }
 
 /// Which checkpoints the baseline keeps.
@@ -112,6 +118,9 @@ impl<'a> Runner<'a> {
             std::mem::take(&mut sim.checkpoints),
             sim.history(),
         );
+        if let Some(m) = sim.fresh_mechanics()? {
+            let _ = runner.blank.set(m);
+        }
         Ok((runner, stats))
     }
 
@@ -134,6 +143,7 @@ impl<'a> Runner<'a> {
             lineages: Vec::new(),
             resimulations: AtomicUsize::new(0),
             thermal_scene: OnceLock::new(),
+            blank: OnceLock::new(),
         }
     }
 
@@ -286,7 +296,7 @@ impl<'a> Runner<'a> {
         let (mut quiet, mut never) = (|_, _| {}, |_: Day, _: &Simulation| false);
         let progress = progress.unwrap_or(&mut quiet);
         let stop = stop.unwrap_or(&mut never);
-        let mut sim = Simulation::new(scene, self.mesh, schedules)?;
+        let mut sim = self.start(scene, schedules)?;
         sim.set_factor_ahead(factor_ahead);
         sim.cancel = cancel;
         sim.checkpoint_every = every_days;
@@ -306,6 +316,27 @@ impl<'a> Runner<'a> {
         }
         sim.run_until(None, progress, stop)?;
         self.resimulations.fetch_add(1, AtomicOrdering::Relaxed);
+        Ok(sim)
+    }
+
+    /// A run of `scene` (this runner's, or its thermal part) over
+    /// `schedules`, not started: its mechanics a copy of the blank model
+    /// when there is one, else built, and kept as the blank.
+    fn start<'s>(
+        &'s self,
+        scene: &'s Scene,
+        schedules: &Schedules,
+    ) -> Result<Simulation<'s>, SimError> {
+        if !scene.any_mechanical() || !std::ptr::eq(scene, self.scene) {
+            return Simulation::new(scene, self.mesh, schedules);
+        }
+        if let Some(blank) = self.blank.get() {
+            return Simulation::like(scene, self.mesh, schedules, blank.fresh()?);
+        }
+        let sim = Simulation::new(scene, self.mesh, schedules)?;
+        if let Some(m) = sim.fresh_mechanics()? {
+            let _ = self.blank.set(m);
+        }
         Ok(sim)
     }
 

@@ -192,6 +192,35 @@ impl<'a> Simulation<'a> {
     /// Prepares a run; nothing is simulated yet. The thermal model exists only
     /// if the scene switches on a thermal effect.
     pub fn new(scene: &'a Scene, mesh: &'a Mesh, schedules: &Schedules) -> Result<Self, SimError> {
+        Self::on(scene, mesh, schedules, None)
+    }
+
+    /// [`Simulation::new`] whose mechanics starts as `like`, a model of
+    /// this scene and mesh before its first pour
+    /// ([`MechanicsModel::fresh`]), instead of being built: a re-simulation
+    /// of a scene skips its construction ordering and rock condensation.
+    /// `like` is not used when the scene has no mechanics.
+    pub fn like(
+        scene: &'a Scene,
+        mesh: &'a Mesh,
+        schedules: &Schedules,
+        like: MechanicsModel,
+    ) -> Result<Self, SimError> {
+        Self::on(scene, mesh, schedules, Some(like))
+    }
+
+    /// A model of this run's scene and mesh before its first pour, on its
+    /// frame, for [`Simulation::like`]; None without mechanics.
+    pub fn fresh_mechanics(&self) -> Result<Option<MechanicsModel>, SimError> {
+        Ok(self.mechanics.as_ref().map(|m| m.fresh()).transpose()?)
+    }
+
+    fn on(
+        scene: &'a Scene,
+        mesh: &'a Mesh,
+        schedules: &Schedules,
+        like: Option<MechanicsModel>,
+    ) -> Result<Self, SimError> {
         check_memory(scene, mesh)?;
         let epoch = scene.epoch;
         let stages = planned_stages(epoch, schedules);
@@ -224,14 +253,16 @@ impl<'a> Simulation<'a> {
         } else {
             None
         };
-        let mechanics = if scene.any_mechanical() {
+        let mechanics = if !scene.any_mechanical() {
+            None
+        } else if let Some(m) = like {
+            Some(m)
+        } else {
             Some(MechanicsModel::new(
                 mesh,
                 &crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?,
                 &Supports::for_sides(mesh, &scene.boundary.supports()).map_err(MechError::from)?,
             )?)
-        } else {
-            None
         };
         let levels = schedules
             .reservoir

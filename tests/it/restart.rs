@@ -470,3 +470,61 @@ fn a_run_keeps_a_checkpoint_on_the_day_it_is_told() {
     assert_eq!(told[before.len()], Day(100), "{told:?}");
     assert_eq!(after.first(), Some(&Day(130)), "{told:?}");
 }
+
+/// A re-simulation starts its mechanics as a copy of a blank model of the
+/// scene (`MechanicsModel::fresh`) instead of building one: no construction
+/// ordering, no rock condensation, and the same run to the bit — on its
+/// own and through the planner's runner (whose first re-simulation builds
+/// the blank it keeps, the second copies it).
+#[test]
+fn a_run_on_a_copied_blank_model_is_the_run_on_a_built_one() {
+    use groutready::planner::runner::Span;
+    let inputs = inputs();
+    let (scene, mesh) = (&inputs.scene, &inputs.mesh);
+    let bytes = |h: &History| postcard::to_stdvec(h).unwrap();
+    let run_to_end = |mut sim: Simulation| {
+        sim.set_end_day(Day(120));
+        let stats = sim.run(None, &mut |_, _| {}).unwrap();
+        (sim.history(), stats.mechanics.expect("mechanics"))
+    };
+    let built = Simulation::new(scene, mesh, &inputs.schedules).unwrap();
+    let blank = built
+        .fresh_mechanics()
+        .unwrap()
+        .expect("a scene with mechanics");
+    let copied = Simulation::like(scene, mesh, &inputs.schedules, blank).unwrap();
+    let (h_built, s_built) = run_to_end(built);
+    let (h_copied, s_copied) = run_to_end(copied);
+    println!(
+        "built: {} METIS calls, {} rock dofs condensed in {:.3} s; copied: {} calls, {} dofs, {:.3} s",
+        s_built.metis_calls,
+        s_built.condensed_dofs,
+        s_built.seconds_condensation,
+        s_copied.metis_calls,
+        s_copied.condensed_dofs,
+        s_copied.seconds_condensation
+    );
+    assert_eq!(s_built.metis_calls, 1);
+    assert!(s_built.condensed_dofs > 0 && s_built.seconds_condensation > 0.0);
+    assert_eq!(s_copied.metis_calls, 0, "the copy ordered the dam again");
+    assert_eq!(
+        s_copied.seconds_condensation, 0.0,
+        "the copy condensed again"
+    );
+    assert_eq!(s_copied.condensed_dofs, s_built.condensed_dofs);
+    assert!(bytes(&h_built) == bytes(&h_copied), "the runs differ");
+
+    let base = run(&inputs, &inputs.schedules, None);
+    let runner = runner(&inputs, &base);
+    let remedied = remedy(&inputs);
+    let span = Span {
+        end_day: END,
+        observe: vec![],
+    };
+    let first = runner.simulate(&remedied, &span).unwrap();
+    let second = runner.simulate(&remedied, &span).unwrap();
+    assert!(
+        bytes(&first) == bytes(&second),
+        "the runner's re-simulations differ"
+    );
+}
