@@ -58,7 +58,8 @@ fn node_dofs(v: u32) -> [u32; 3] {
 
 /// The pattern of the elements `live` and the joint pairs between live
 /// nodes, with node `v` numbered `map[v]` (u32::MAX: not in it), plus
-/// `extra` element dof lists.
+/// `extra` element dof lists: [`tied_pattern`] with every node its own
+/// master.
 fn pattern(
     mesh: &Mesh,
     live: &dyn Fn(usize) -> bool,
@@ -66,24 +67,8 @@ fn pattern(
     n: u32,
     extra: &[Vec<u32>],
 ) -> Arc<Pattern> {
-    let m = |v: u32| node_dofs(map[v as usize]);
-    let mut elems: Vec<Vec<u32>> = mesh
-        .elements
-        .iter()
-        .enumerate()
-        .filter(|&(e, _)| live(e))
-        .map(|(_, c)| c.iter().flat_map(|&v| m(v)).collect())
-        .collect();
-    for p in &mesh.face_pairs {
-        for k in 0..4 {
-            let (a, b) = (p.nodes_a[k], p.nodes_b[k]);
-            if a != b && map[a as usize] != u32::MAX && map[b as usize] != u32::MAX {
-                elems.push([m(a), m(b)].concat());
-            }
-        }
-    }
-    elems.extend(extra.iter().cloned());
-    Arc::new(Pattern::new(3 * n as usize, &elems))
+    let own: Vec<Vec<u32>> = (0..mesh.nodes.len() as u32).map(|v| vec![v]).collect();
+    tied_pattern(mesh, &own, map, n, live, extra)
 }
 
 /// Numbers the nodes `keep` in increasing order; returns the map and count.
@@ -382,13 +367,16 @@ fn masters_of(merge: &LayerMerge, tied: &[u32], nn: usize) -> Vec<Vec<u32>> {
     masters
 }
 
-/// The pattern of the complete dam with each node replaced by its masters.
+/// The pattern of the elements `live` and the joint pairs, each node's dofs
+/// those of its masters (numbered by `map`; a pair with an unnumbered node
+/// that is its own master is left out), plus `extra` element dof lists.
 fn tied_pattern(
     mesh: &Mesh,
     masters: &[Vec<u32>],
     map: &[u32],
     n: u32,
     live: &dyn Fn(usize) -> bool,
+    extra: &[Vec<u32>],
 ) -> Arc<Pattern> {
     let dofs = |nodes: &mut dyn Iterator<Item = u32>| {
         let mut d: Vec<u32> = nodes
@@ -417,6 +405,7 @@ fn tied_pattern(
             elems.push(dofs(&mut [p.nodes_a[k], p.nodes_b[k]].into_iter()));
         }
     }
+    elems.extend(extra.iter().cloned());
     Arc::new(Pattern::new(3 * n as usize, &elems))
 }
 
@@ -477,7 +466,7 @@ fn merged_concrete(mesh: &Mesh) -> anyhow::Result<()> {
     let fine_nodes = node_sequence(&fine, &identity);
     let (map_all, n_all) = number(|v| all[v].len() == 1, nn);
     let merged_order =
-        metis_nested_dissection(&tied_pattern(mesh, &all, &map_all, n_all, &|_| true))?;
+        metis_nested_dissection(&tied_pattern(mesh, &all, &map_all, n_all, &|_| true, &[]))?;
     let merged_nodes = node_sequence(&merged_order, &map_all);
     // each node that may be tied just before the master eliminated first
     let mut at = vec![usize::MAX; nn];
@@ -530,7 +519,7 @@ fn merged_concrete(mesh: &Mesh) -> anyhow::Result<()> {
         let untied = masters_of(&merge, &[], nn);
         for (name, m) in [("untied", &untied), ("tied", &tied)] {
             let (map, n) = number(|v| node_live[v] && m[v].len() == 1, nn);
-            let p = tied_pattern(mesh, m, &map, n, &live);
+            let p = tied_pattern(mesh, m, &map, n, &live, &[]);
             println!(
                 "live below {zcut:.1} m, {name}, {} tied:",
                 (0..nn).filter(|&v| node_live[v] && m[v].len() == 2).count()

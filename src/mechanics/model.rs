@@ -173,6 +173,10 @@ pub struct MechStats {
     /// wall time of the steps' condensing and recovering [s]
     #[serde(default)]
     pub seconds_rock: f64,
+    /// most nodes layer merging tied in a live system
+    /// ([`super::layer_merging`]; 0 when it is off)
+    #[serde(default)]
+    pub max_merged_nodes: usize,
 }
 
 impl MechStats {
@@ -573,6 +577,7 @@ impl MechanicsModel {
                 self.build_live(&live, &pair_live, &merged)?
             }
         };
+        self.stats.max_merged_nodes = self.stats.max_merged_nodes.max(merged.len());
         self.merged = merged;
         self.dirty = false;
         Ok(())

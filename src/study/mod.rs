@@ -386,7 +386,7 @@ fn print_mechanics(m: &MechStats) {
             / m.steps.max(1) as f64
     );
     println!(
-        "{:<22} orderings: {} METIS calls, {:.2} s; rock condensed once: {} dofs, {:.2} s, then {} solves with its factor, {:.2} s; symbolic analyses {:.2} s; over the {} live sets Σ L entries {:.1}M, Σ flops of one factorisation {:.2} Gflop; numeric factorisations {:.1} Gflop in all",
+        "{:<22} orderings: {} METIS calls, {:.2} s; rock condensed once: {} dofs, {:.2} s, then {} solves with its factor, {:.2} s; layer merging tied up to {} nodes; symbolic analyses {:.2} s; over the {} live sets Σ L entries {:.1}M, Σ flops of one factorisation {:.2} Gflop; numeric factorisations {:.1} Gflop in all",
         "",
         m.metis_calls,
         m.seconds_ordering,
@@ -394,6 +394,7 @@ fn print_mechanics(m: &MechStats) {
         m.seconds_condensation,
         m.rock_solves,
         m.seconds_rock,
+        m.max_merged_nodes,
         m.seconds_analysis,
         m.symbolic,
         m.live_sets_factor_nnz as f64 / 1e6,

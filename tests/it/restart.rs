@@ -528,3 +528,45 @@ fn a_run_on_a_copied_blank_model_is_the_run_on_a_built_one() {
         "the runner's re-simulations differ"
     );
 }
+
+/// With layer merging on (`solver.layer_merging_age_days`), a run
+/// restarted from a checkpoint taken once nodes are tied repeats the run:
+/// the tied set is derived from the checkpointed live set and birth days,
+/// never stored.
+#[test]
+fn restart_with_layer_merging_repeats_the_run() {
+    let mut inputs = inputs();
+    inputs.scene.solver.layer_merging_age_days = 30;
+    let merged_nodes = |end: Day, restart: Option<(&Checkpoint, &History)>| {
+        let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
+        sim.set_end_day(end);
+        sim.checkpoint_every = Some(30);
+        if let Some((ck, h)) = restart {
+            sim.restore(ck, h);
+        }
+        let stats = sim.run(None, &mut |_, _| {}).unwrap();
+        let tied = stats.mechanics.expect("mechanics").max_merged_nodes;
+        (sim, tied)
+    };
+    let (a, tied_a) = merged_nodes(END, None);
+    let ck = a
+        .checkpoints
+        .iter()
+        .rev()
+        .find(|c| c.day <= END.plus(-40))
+        .unwrap()
+        .clone();
+    let (_, tied_before) = merged_nodes(ck.day, None);
+    let (b, tied_b) = merged_nodes(END, Some((&ck, &a.history())));
+    let (diff, days, labels, dt) = compare(&a.history(), &b.history(), ck.day);
+    println!(
+        "layer merging 30 d, restart at {:?}: {tied_before} nodes tied by then, {tied_a} in the run, {tied_b} after the restart; {days} days compared, aperture diff {diff:e}, {labels} labels, temperature diff {dt:e} °C",
+        ck.day
+    );
+    assert!(tied_before > 0, "nothing tied at the restart point");
+    assert!(tied_b >= tied_before);
+    assert!(days > 20);
+    assert!(diff <= 1e-9, "relative aperture difference {diff:e}");
+    assert_eq!(labels, 0);
+    assert!(dt <= 1e-9);
+}
