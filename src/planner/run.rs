@@ -3,10 +3,11 @@
 //! reaching for the rules, history index or runner inside the planner.
 
 use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use chrono::NaiveDate;
 
+use crate::mechanics::MechanicsModel;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::{DamLayout, Schedules};
@@ -30,9 +31,34 @@ pub struct PlannedRun {
     pub plan: Plan,
     pub history: History,
     pub checkpoints: Vec<Checkpoint>,
+    /// the scene's mechanical model before its first pour, kept from the
+    /// first what-if for the next ones ([`Runner::with_blank`])
+    blank: OnceLock<MechanicsModel>,
 }
 
 impl PlannedRun {
+    /// A plan with what it was made from (as `groutready plan` leaves it
+    /// in its run folder).
+    pub fn new(
+        scene: Scene,
+        mesh: Mesh,
+        schedules: Schedules,
+        plan: Plan,
+        history: History,
+        checkpoints: Vec<Checkpoint>,
+    ) -> PlannedRun {
+        PlannedRun {
+            layout: crate::sim::dam_layout(&mesh),
+            scene,
+            mesh,
+            schedules,
+            plan,
+            history,
+            checkpoints,
+            blank: OnceLock::new(),
+        }
+    }
+
     /// The plan's readiness of a zone, if it is in the plan.
     pub fn readiness(&self, zone: ZoneId) -> Option<&ZoneReadiness> {
         self.plan.zones.iter().find(|z| z.zone_id() == zone)
@@ -65,13 +91,21 @@ impl PlannedRun {
         cancel: Option<Arc<AtomicBool>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<WhatIfOutcome, SimError> {
+        let blank = self.blank.get().map(MechanicsModel::fresh).transpose()?;
         let runner = Runner::from_parts(
             &self.scene,
             &self.mesh,
             self.schedules.clone(),
             self.checkpoints.clone(),
             self.history.clone(),
-        );
-        whatif::run(&runner, &self.layout, self.plan.as_of, w, cancel, progress)
+        )
+        .with_blank(blank);
+        let outcome = whatif::run(&runner, &self.layout, self.plan.as_of, w, cancel, progress);
+        if self.blank.get().is_none() {
+            if let Some(m) = runner.blank() {
+                let _ = self.blank.set(m.fresh()?);
+            }
+        }
+        outcome
     }
 }

@@ -147,6 +147,22 @@ impl<'a> Runner<'a> {
         }
     }
 
+    /// This runner, its re-simulations starting from `blank` (a model of
+    /// its scene and mesh before the first pour, [`MechanicsModel::fresh`]
+    /// of another run of them) when given.
+    pub fn with_blank(self, blank: Option<MechanicsModel>) -> Self {
+        if let Some(m) = blank {
+            let _ = self.blank.set(m);
+        }
+        self
+    }
+
+    /// The model re-simulations with mechanics start from a copy of, once
+    /// the baseline or a first re-simulation has made it.
+    pub fn blank(&self) -> Option<&MechanicsModel> {
+        self.blank.get()
+    }
+
     /// Simulates `schedules` over `span`, restarting from the latest baseline
     /// checkpoint on or before the first date they differ from the baseline.
     pub fn simulate(&self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {

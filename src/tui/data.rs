@@ -21,19 +21,11 @@ impl RunData {
     pub fn load(dir: &Path) -> Result<RunData, AppError> {
         let o = restart::open(dir)?;
         let mesh = app::build_mesh(&o.scene, &dir.display().to_string())?;
-        let layout = app::dam_layout(&mesh);
-        let grid = Grid::new(&layout, &o.schedules, &o.plan);
+        let run = PlannedRun::new(o.scene, mesh, o.schedules, o.plan, o.history, o.checkpoints);
+        let grid = Grid::new(&run.layout, &run.schedules, &run.plan);
         Ok(RunData {
             dir: o.dir,
-            run: PlannedRun {
-                scene: o.scene,
-                mesh,
-                layout,
-                schedules: o.schedules,
-                plan: o.plan,
-                history: o.history,
-                checkpoints: o.checkpoints,
-            },
+            run,
             grid,
         })
     }
