@@ -170,14 +170,14 @@ impl CondensedRock {
     ) -> Result<Vec<f64>, SolveError> {
         let mut y = b_r.to_vec();
         self.hold(&mut y);
-        let mut p = vec![0.0; self.n()];
-        for &(h, v) in held {
-            // only supported unknowns take increments (`prescribe` checks)
-            debug_assert!(self.held[h as usize], "condensed unknown {h} is not held");
-            p[h as usize] = v;
-            y[h as usize] = v;
-        }
         if !held.is_empty() {
+            let mut p = vec![0.0; self.n()];
+            for &(h, v) in held {
+                // only supported unknowns take increments (`prescribe` checks)
+                debug_assert!(self.held[h as usize], "condensed unknown {h} is not held");
+                p[h as usize] = v;
+                y[h as usize] = v;
+            }
             for &(h, r, v) in &self.held_to_r {
                 y[r as usize] -= v * p[h as usize];
             }
