@@ -483,7 +483,7 @@ fn a_run_on_a_copied_blank_model_is_the_run_on_a_built_one() {
     let (scene, mesh) = (&inputs.scene, &inputs.mesh);
     let bytes = |h: &History| postcard::to_stdvec(h).unwrap();
     let run_to_end = |mut sim: Simulation| {
-        sim.set_end_day(Day(120));
+        sim.set_end_day(Day(60));
         let stats = sim.run(None, &mut |_, _| {}).unwrap();
         (sim.history(), stats.mechanics.expect("mechanics"))
     };
