@@ -101,10 +101,8 @@ impl PlannedRun {
         )
         .with_blank(blank);
         let outcome = whatif::run(&runner, &self.layout, self.plan.as_of, w, cancel, progress);
-        if self.blank.get().is_none() {
-            if let Some(m) = runner.blank() {
-                let _ = self.blank.set(m.fresh()?);
-            }
+        if let Some(m) = runner.into_blank() {
+            let _ = self.blank.set(m);
         }
         outcome
     }

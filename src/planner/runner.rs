@@ -159,8 +159,8 @@ impl<'a> Runner<'a> {
 
     /// The model re-simulations with mechanics start from a copy of, once
     /// the baseline or a first re-simulation has made it.
-    pub fn blank(&self) -> Option<&MechanicsModel> {
-        self.blank.get()
+    pub fn into_blank(self) -> Option<MechanicsModel> {
+        self.blank.into_inner()
     }
 
     /// Simulates `schedules` over `span`, restarting from the latest baseline
