@@ -7,36 +7,59 @@
 //! ahead ([`super::ahead`]), which analyses the next live set there when
 //! the next step pours lifts, so that the step's own thread does not.
 
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
+use std::time::Instant;
 
 use crate::fem::elasticity::{self, Mat24, SolidGauss};
 use crate::fem::hex8_modes::{self, Modes};
 use crate::fem::SparseSym;
 use crate::material::creep::{self, StepCoefficients};
 use crate::material::CreepLaw;
-use crate::mesh::{Mesh, Part};
-use crate::scene::SolidElement;
+use crate::mesh::{Mesh, Part, SurfaceKind};
+use crate::scene::{OrderingKind, SolidElement};
 
 use super::ahead::Assembled;
+use super::contact_step::JointSolveSettings;
 use super::error::MechError;
-use super::joints::JointPoint;
+use super::grout_stops::{inside_grout_stops, StopSample};
+use super::joints::{build_points, JointPoint};
 use super::layer_merging::LayerMerge;
-use super::live::{ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan};
-use super::rock_condensation::CondensedRock;
+use super::live::{
+    ConstructionOrdering, ElementSet, LiveElement, LiveError, LiveSystem, OrderingPlan,
+};
+use super::rock_condensation::{CondensedRock, RockElements};
 use super::rock_ties::Ties;
-use super::settings::{ConcreteMechanics, MechanicsSettings};
+use super::settings::{JointMechanics, MechanicsSettings};
 
-/// The unchanging parts of a mechanical model.
-pub(super) struct Frame {
+/// The unchanging parts of a mechanical model: what the scene's settings,
+/// the mesh and the supports make, before any pour. Every run of one scene
+/// and mesh can share it ([`super::MechanicsModel::on_frame`]): the
+/// planner's re-simulations start on the baseline's frame instead of
+/// making their own (the construction ordering's METIS call and the rock
+/// condensation: 0.46–0.69 s of each re-simulation on the demo).
+pub struct Frame {
+    pub(super) settings: MechanicsSettings,
+    pub(super) joint_settings: JointSolveSettings,
     pub(super) tables: ElementTables,
-    /// the concrete's laws (ageing modulus, creep)
-    pub(super) concrete: ConcreteMechanics,
     /// the law of an element that does not creep (rock, or no `creep` effect)
     pub(super) no_creep: CreepLaw,
     pub(super) elements: Vec<[u32; 8]>,
     pub(super) n_nodes: usize,
+    /// node coordinates (those the ties straighten, on their chords)
+    pub(super) node_xyz: Vec<[f64; 3]>,
+    /// the thermal unknown of each node
+    pub(super) thermal_dof: Vec<u32>,
+    /// the elements of each lift (block, lift)
+    pub(super) lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
+    /// the element faces the reservoir wets (element, face)
+    pub(super) wet_faces: Vec<(u32, u8)>,
     /// contact points of the joints (the `joints` effect)
     pub(super) points: Vec<JointPoint>,
+    /// joint point of each side-a node
+    pub(super) point_of_a: HashMap<u32, u32>,
+    /// per zone, where its aperture is sampled inside the grout stops
+    pub(super) zone_stop_samples: HashMap<(u32, u32), Vec<StopSample>>,
     /// per global dof: held by a support
     pub(super) supported: Vec<bool>,
     /// the rock nodes tied to their grid lines (`solver.rock_coarsening`)
@@ -49,7 +72,116 @@ pub(super) struct Frame {
     pub(super) rock: Option<Arc<CondensedRock>>,
 }
 
+/// What making a [`Frame`] cost; the model that makes one counts it.
+pub(super) struct FrameCosts {
+    pub(super) metis_calls: usize,
+    pub(super) seconds_ordering: f64,
+    pub(super) seconds_condensation: f64,
+}
+
 impl Frame {
+    /// The frame of `mesh` under `settings` with the dofs `supported` held.
+    pub(super) fn build(
+        mesh: &Mesh,
+        settings: &MechanicsSettings,
+        supported: Vec<bool>,
+    ) -> Result<(Frame, FrameCosts), MechError> {
+        let ties = Ties::build(
+            &mesh.elements,
+            &mesh.parts,
+            &mesh.nodes,
+            &supported,
+            settings.rock_coarsening,
+        );
+        let merge = LayerMerge::build(mesh, &supported, settings.layer_merging_age_days);
+        // the mechanics' rock is the tied one and its concrete the one
+        // merging ties, the nodes tied on their chords
+        let straightened;
+        let mesh = if ties.count() > 0 || !merge.is_empty() {
+            let mut m = mesh.clone();
+            ties.straighten(&mut m.nodes);
+            merge.straighten(&mut m.nodes);
+            straightened = m;
+            &straightened
+        } else {
+            mesh
+        };
+        let tables = ElementTables::new(mesh, settings)?;
+        let points = if settings.joints {
+            build_points(mesh).map_err(|source| MechError::Contact { day: 0.0, source })?
+        } else {
+            Vec::new()
+        };
+        let mut costs = FrameCosts {
+            metis_calls: 0,
+            seconds_ordering: 0.0,
+            seconds_condensation: 0.0,
+        };
+        let ordering = match settings.ordering {
+            OrderingKind::Amd => OrderingPlan::Amd,
+            OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
+            OrderingKind::Metis => {
+                let c = ConstructionOrdering::new(
+                    &mesh.elements,
+                    &points,
+                    mesh.nodes.len(),
+                    &ties,
+                    &merge,
+                )
+                .map_err(|source| MechError::Live { day: 0.0, source })?;
+                costs.metis_calls += 1;
+                costs.seconds_ordering += c.seconds;
+                OrderingPlan::Construction(Arc::new(c))
+            }
+        };
+        let rock = condensed_rock(
+            mesh, settings, &tables, &ordering, &points, &supported, &ties,
+        )?;
+        if let Some((_, seconds)) = &rock {
+            costs.seconds_condensation = *seconds;
+        }
+        let frame = Frame {
+            settings: settings.clone(),
+            joint_settings: joint_solve_settings(mesh, &settings.joint),
+            tables,
+            no_creep: CreepLaw { terms: Vec::new() },
+            elements: mesh.elements.clone(),
+            n_nodes: mesh.nodes.len(),
+            node_xyz: mesh.nodes.clone(),
+            thermal_dof: mesh.thermal_dof.clone(),
+            lift_elems: mesh.lift_elements(),
+            wet_faces: mesh
+                .surfaces
+                .iter()
+                .filter(|s| s.kind == SurfaceKind::Wet)
+                .map(|s| (s.elem, s.face))
+                .collect(),
+            point_of_a: points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.a, i as u32))
+                .collect(),
+            zone_stop_samples: inside_grout_stops(mesh, &points, settings.joint.grout_stop_inset_m),
+            points,
+            supported,
+            ties,
+            merge,
+            ordering,
+            rock: rock.map(|(r, _)| Arc::new(r)),
+        };
+        Ok((frame, costs))
+    }
+
+    /// Creep terms per Gauss point of a concrete element (0 without the
+    /// `creep` effect).
+    pub(super) fn creep_terms(&self) -> usize {
+        self.settings
+            .concrete
+            .creep
+            .as_ref()
+            .map_or(0, |l| l.n_terms())
+    }
+
     /// Numbers and analyses the live system of the elements `live` (the
     /// joint points `pair_live` paired, the nodes `merged` tied by layer
     /// merging), with its rock matrix.
@@ -135,7 +267,7 @@ impl Frame {
     ) -> Result<StepCoefficients, MechError> {
         let (age0, age1) = ((t0 - birth).max(0.0), t1 - birth);
         let res = if self.tables.concrete[e] {
-            let concrete = &self.concrete;
+            let concrete = &self.settings.concrete;
             creep::coefficients(
                 &concrete.modulus,
                 concrete.creep.as_ref().unwrap_or(&self.no_creep),
@@ -184,6 +316,77 @@ impl Frame {
             coeffs,
             born,
         })
+    }
+}
+
+/// The rock to condense once per run and the seconds it took: with
+/// `solver.condense_rock`, the construction ordering, no tied rock and some
+/// column frozen ([`super::rock_condensation`]).
+fn condensed_rock(
+    mesh: &Mesh,
+    settings: &MechanicsSettings,
+    tables: &ElementTables,
+    ordering: &OrderingPlan,
+    points: &[JointPoint],
+    supported: &[bool],
+    ties: &Ties,
+) -> Result<Option<(CondensedRock, f64)>, MechError> {
+    let OrderingPlan::Construction(c) = ordering else {
+        return Ok(None);
+    };
+    if !settings.condense_rock || ties.count() > 0 {
+        return Ok(None);
+    }
+    let t = Instant::now();
+    let rock: Vec<bool> = tables.concrete.iter().map(|&c| !c).collect();
+    let mut rock_only = vec![true; mesh.nodes.len()];
+    let mut used = vec![false; mesh.nodes.len()];
+    for (e, conn) in mesh.elements.iter().enumerate() {
+        for &v in conn {
+            used[v as usize] = true;
+            rock_only[v as usize] &= rock[e];
+        }
+    }
+    let frozen = c
+        .frozen(&mesh.elements, points, &|v| used[v] && rock_only[v])
+        .map_err(|source| MechError::Live { day: 0.0, source })?;
+    let elements = RockElements {
+        conn: &mesh.elements,
+        rock: &rock,
+        k_unit: &tables.k_unit,
+        modulus: tables.rock_modulus,
+        supported,
+    };
+    let condensed = CondensedRock::new(&elements, &frozen).map_err(MechError::Condensation)?;
+    Ok(condensed.map(|r| (r, t.elapsed().as_secs_f64())))
+}
+
+/// The joint solver's settings for `mesh`. Gaps are compared to 1e-10 of
+/// the model's size, forces to 1e-9 of the step's largest force: the same
+/// decisions in m/N and mm/MPa units.
+fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettings {
+    let (lo, hi) = mesh
+        .nodes
+        .iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+            (
+                std::array::from_fn(|k| lo[k].min(p[k])),
+                std::array::from_fn(|k| hi[k].max(p[k])),
+            )
+        });
+    let size = (0..3)
+        .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    JointSolveSettings {
+        method: joint.solver,
+        mu_static: joint.mu_static,
+        mu_kinetic: joint.mu_kinetic,
+        max_iterations: joint.max_iterations,
+        gap_tolerance: 1e-10 * size,
+        force_tolerance: 1e-9,
+        bond_strength: joint.bond_strength_pa,
+        capacitance: joint.capacitance,
     }
 }
 

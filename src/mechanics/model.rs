@@ -1,6 +1,5 @@
 //! The mechanical model of the live elements and its incremental step.
 
-use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -11,26 +10,22 @@ use crate::fem::elasticity;
 use crate::fem::hex8::FACES;
 use crate::fem::{CapacitanceStats, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
-use crate::material::{CreepLaw, Poisson};
+use crate::material::Poisson;
 use crate::mesh::{Mesh, SurfaceKind, ZoneSite};
-use crate::scene::OrderingKind;
 use crate::vocab::JointState;
 
 use super::ahead::{
     AheadStats, Analysed, Assembled, Births, BirthsPlacement, BuildBirths, FactorAhead,
     FactorGuess, NextStep, Order,
 };
-use super::contact_step::{self, JointSolveSettings, Prepared, RefactorCounts, StepSystem};
+use super::contact_step::{self, Prepared, RefactorCounts, StepSystem};
 use super::error::MechError;
 use super::error::RESIDUAL_TOLERANCE;
-use super::frame::{ElementTables, Frame};
-use super::grout_stops::{inside_grout_stops, StopSample};
-use super::joints::{build_points, Grout, JointPoint, JointPointState, PointState};
-use super::layer_merging::LayerMerge;
-use super::live::{ConstructionOrdering, LiveError, LiveSystem, OrderingPlan, NONE};
-use super::rock_condensation::{CondensedRock, RockElements};
-use super::rock_ties::Ties;
-use super::settings::{JointMechanics, MechanicsSettings};
+use super::frame::Frame;
+use super::grout_stops::StopSample;
+use super::joints::{Grout, JointPoint, JointPointState, PointState};
+use super::live::{LiveError, LiveSystem, NONE};
+use super::settings::MechanicsSettings;
 
 /// Gravity [m/s²].
 pub const GRAVITY: f64 = 9.81;
@@ -248,24 +243,15 @@ pub struct MechState {
 
 /// The staged mechanical model.
 pub struct MechanicsModel {
-    /// what a run never changes, shared with the thread working ahead
+    /// what a run never changes, shared with the thread working ahead and
+    /// with other runs of the scene ([`MechanicsModel::on_frame`])
     frame: Arc<Frame>,
-    settings: MechanicsSettings,
-    node_xyz: Vec<[f64; 3]>,
-    thermal_dof: Vec<u32>,
-    lift_elems: BTreeMap<(u32, u32), Vec<u32>>,
     /// displacement increments of supported dofs for the next step (global dof, value)
     prescribed: Vec<(u32, f64)>,
-    wet_faces: Vec<(u32, u8)>,
     /// the system of the live set at the last rebuild (empty before the first step)
     sys: LiveSystem,
     /// the live set has changed since `sys` was built
     dirty: bool,
-    joint_settings: JointSolveSettings,
-    /// joint point of each side-a node
-    point_of_a: HashMap<u32, u32>,
-    /// per zone, where its aperture is sampled inside the grout stops
-    zone_stop_samples: HashMap<(u32, u32), Vec<StopSample>>,
     pub state: MechState,
     pub stats: MechStats,
     /// the next step's factorisation, made while this one runs
@@ -361,149 +347,48 @@ impl MechanicsModel {
         supports: &Supports,
     ) -> Result<MechanicsModel, MechError> {
         let supported = supports.flags(mesh.nodes.len());
-        let ties = Ties::build(
-            &mesh.elements,
-            &mesh.parts,
-            &mesh.nodes,
-            &supported,
-            settings.rock_coarsening,
-        );
-        let merge = LayerMerge::build(mesh, &supported, settings.layer_merging_age_days);
-        // the mechanics' rock is the tied one and its concrete the one
-        // merging ties, the nodes tied on their chords
-        let straightened;
-        let mesh = if ties.count() > 0 || !merge.is_empty() {
-            let mut m = mesh.clone();
-            ties.straighten(&mut m.nodes);
-            merge.straighten(&mut m.nodes);
-            straightened = m;
-            &straightened
-        } else {
-            mesh
-        };
-        let tables = ElementTables::new(mesh, settings)?;
-        let points = if settings.joints {
-            build_points(mesh).map_err(|source| MechError::Contact { day: 0.0, source })?
-        } else {
-            Vec::new()
-        };
-        let n_creep = settings.concrete.creep.as_ref().map_or(0, |l| l.n_terms());
-        let sys = LiveSystem::empty(&points, mesh.nodes.len())
-            .map_err(|source| MechError::Live { day: 0.0, source })?;
-        let mut stats = MechStats::default();
-        let ordering = match settings.ordering {
-            OrderingKind::Amd => OrderingPlan::Amd,
-            OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
-            OrderingKind::Metis => {
-                let c = ConstructionOrdering::new(
-                    &mesh.elements,
-                    &points,
-                    mesh.nodes.len(),
-                    &ties,
-                    &merge,
-                )
-                .map_err(|source| MechError::Live { day: 0.0, source })?;
-                stats.metis_calls += 1;
-                stats.seconds_ordering += c.seconds;
-                OrderingPlan::Construction(std::sync::Arc::new(c))
-            }
-        };
-        let rock = condensed_rock(
-            mesh, settings, &tables, &ordering, &points, &supported, &ties,
-        )?;
-        if let Some((r, seconds)) = &rock {
-            stats.condensed_dofs = r.n();
-            stats.seconds_condensation = *seconds;
-        }
-        let state =
-            MechState::before_pours(mesh.nodes.len(), &tables.concrete, points.len(), n_creep);
-        Ok(MechanicsModel {
-            settings: settings.clone(),
-            node_xyz: mesh.nodes.clone(),
-            thermal_dof: mesh.thermal_dof.clone(),
-            lift_elems: mesh.lift_elements(),
-            prescribed: Vec::new(),
-            wet_faces: mesh
-                .surfaces
-                .iter()
-                .filter(|s| s.kind == SurfaceKind::Wet)
-                .map(|s| (s.elem, s.face))
-                .collect(),
-            sys,
-            dirty: true,
-            joint_settings: joint_solve_settings(mesh, &settings.joint),
-            point_of_a: points
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (p.a, i as u32))
-                .collect(),
-            zone_stop_samples: inside_grout_stops(mesh, &points, settings.joint.grout_stop_inset_m),
-            state,
-            stats,
-            ahead: FactorAhead::new(factor_ahead(settings)),
-            restored_guess: None,
-            merged: Vec::new(),
-            frame: Arc::new(Frame {
-                tables,
-                concrete: settings.concrete.clone(),
-                no_creep: CreepLaw { terms: Vec::new() },
-                elements: mesh.elements.clone(),
-                n_nodes: mesh.nodes.len(),
-                points,
-                supported,
-                ties,
-                merge,
-                ordering,
-                rock: rock.map(|(r, _)| Arc::new(r)),
-            }),
-        })
+        let (frame, costs) = Frame::build(mesh, settings, supported)?;
+        let mut model = MechanicsModel::on_frame(Arc::new(frame))?;
+        model.stats.metis_calls = costs.metis_calls;
+        model.stats.seconds_ordering = costs.seconds_ordering;
+        model.stats.seconds_condensation = costs.seconds_condensation;
+        Ok(model)
     }
 
-    /// A model of the same scene and mesh before its first pour, on this
-    /// model's frame: what [`MechanicsModel::new`] builds, without its
-    /// construction ordering (a METIS call on the complete dam) and rock
-    /// condensation, which depend on the scene and mesh alone. For the
-    /// planner's re-simulations of one scene (on the demo 0.46–0.69 s of
-    /// each mechanical one's start). Its stats count neither again; the
-    /// condensed rock is still reported.
-    pub fn fresh(&self) -> Result<MechanicsModel, MechError> {
-        let frame = Arc::clone(&self.frame);
-        let n_creep = self
-            .settings
-            .concrete
-            .creep
-            .as_ref()
-            .map_or(0, |l| l.n_terms());
+    /// A model before its first pour on `frame`, the frame of another
+    /// model of the same scene and mesh ([`MechanicsModel::frame`]): what
+    /// [`MechanicsModel::new`] builds, without making the frame again (the
+    /// construction ordering's METIS call on the complete dam and the rock
+    /// condensation). Its stats count neither; the condensed rock is still
+    /// reported.
+    pub fn on_frame(frame: Arc<Frame>) -> Result<MechanicsModel, MechError> {
         let state = MechState::before_pours(
             frame.n_nodes,
             &frame.tables.concrete,
             frame.points.len(),
-            n_creep,
+            frame.creep_terms(),
         );
         let sys = LiveSystem::empty(&frame.points, frame.n_nodes)
             .map_err(|source| MechError::Live { day: 0.0, source })?;
         Ok(MechanicsModel {
-            settings: self.settings.clone(),
-            node_xyz: self.node_xyz.clone(),
-            thermal_dof: self.thermal_dof.clone(),
-            lift_elems: self.lift_elems.clone(),
             prescribed: Vec::new(),
-            wet_faces: self.wet_faces.clone(),
             sys,
             dirty: true,
-            joint_settings: self.joint_settings,
-            point_of_a: self.point_of_a.clone(),
-            zone_stop_samples: self.zone_stop_samples.clone(),
             state,
             stats: MechStats {
-                condensed_dofs: self.stats.condensed_dofs,
+                condensed_dofs: frame.rock.as_ref().map_or(0, |r| r.n()),
                 ..MechStats::default()
             },
-            ahead: FactorAhead::new(factor_ahead(&self.settings)),
+            ahead: FactorAhead::new(factor_ahead(&frame.settings)),
             restored_guess: None,
             merged: Vec::new(),
             frame,
         })
+    }
+
+    /// This model's frame, for [`MechanicsModel::on_frame`].
+    pub fn frame(&self) -> Arc<Frame> {
+        Arc::clone(&self.frame)
     }
 
     /// Restores a checkpointed state ([`MechanicsModel::state`] of a run of
@@ -523,7 +408,8 @@ impl MechanicsModel {
     /// cores are otherwise busy; the answer is the same to round-off.
     pub fn set_factor_ahead(&mut self, on: bool) {
         self.settle_ahead();
-        self.ahead.set_enabled(on && factor_ahead(&self.settings));
+        self.ahead
+            .set_enabled(on && factor_ahead(&self.frame.settings));
     }
 
     /// Where the next live set is analysed when the next step pours lifts
@@ -552,7 +438,7 @@ impl MechanicsModel {
 
     /// Pours lift `lift` of `block` on `day`: its elements are born stress-free.
     pub fn pour(&mut self, block: u32, lift: u32, day: f64) {
-        if let Some(elems) = self.lift_elems.get(&(block, lift)) {
+        if let Some(elems) = self.frame.lift_elems.get(&(block, lift)) {
             for &e in elems {
                 self.state.live[e as usize] = true;
                 self.state.birth_day[e as usize] = day;
@@ -586,7 +472,7 @@ impl MechanicsModel {
     /// Whether each joint point is live (both its nodes in a live element)
     /// when the elements `live` are.
     fn pair_live(&self, live: &[bool]) -> Vec<bool> {
-        let mut node_live = vec![false; self.node_xyz.len()];
+        let mut node_live = vec![false; self.frame.node_xyz.len()];
         for (e, conn) in self.frame.elements.iter().enumerate() {
             if live[e] {
                 conn.iter().for_each(|&k| node_live[k as usize] = true);
@@ -605,8 +491,8 @@ impl MechanicsModel {
         // A block cast against its neighbour starts touching it: the first
         // guess is closed (most new pairs are pressed by the fresh
         // concrete's weight and expansion), open with a gap.
-        let gap = self.settings.joint.initial_gap_m;
-        let closed = gap == 0.0 && self.joint_settings.mu_static > 0.0;
+        let gap = self.frame.settings.joint.initial_gap_m;
+        let closed = gap == 0.0 && self.frame.joint_settings.mu_static > 0.0;
         let start = JointPointState {
             paired: true,
             gap,
@@ -656,7 +542,7 @@ impl MechanicsModel {
     /// (at least the scene's floor) and which keeps the present contact force.
     /// Returns the number of points grouted.
     pub fn grout(&mut self, joint: u32, zone: u32, day: f64) -> usize {
-        let j = &self.settings.joint;
+        let j = &self.frame.settings.joint;
         let moduli = [
             j.grout_shear_modulus_pa,
             j.grout_shear_modulus_pa,
@@ -690,7 +576,7 @@ impl MechanicsModel {
         std::array::from_fn(|g| {
             let n = crate::fem::hex8::shape(self.frame.tables.gauss[e][g].xi);
             (0..8)
-                .map(|k| n[k] * temps[self.thermal_dof[conn[k] as usize] as usize])
+                .map(|k| n[k] * temps[self.frame.thermal_dof[conn[k] as usize] as usize])
                 .sum()
         })
     }
@@ -698,16 +584,16 @@ impl MechanicsModel {
     /// Hydrostatic load of the water at `level` on the live wet faces, per dof.
     fn water_load(&self, level: Option<f64>) -> Result<Vec<f64>, MechError> {
         let mut f = vec![0.0; self.state.u.len()];
-        let Some(level) = level.filter(|_| self.settings.reservoir_load) else {
+        let Some(level) = level.filter(|_| self.frame.settings.reservoir_load) else {
             return Ok(f);
         };
-        for &(e, face) in &self.wet_faces {
+        for &(e, face) in &self.frame.wet_faces {
             if !self.state.live[e as usize] {
                 continue;
             }
             let ids = FACES[face as usize];
             let fc: [[f64; 3]; 4] = std::array::from_fn(|k| {
-                self.node_xyz[self.frame.elements[e as usize][ids[k]] as usize]
+                self.frame.node_xyz[self.frame.elements[e as usize][ids[k]] as usize]
             });
             if fc.iter().all(|p| p[2] >= level) {
                 continue;
@@ -888,7 +774,7 @@ impl MechanicsModel {
         let mut live = self.state.live.clone();
         let mut birth = self.state.birth_day.clone();
         for key in &next.pours {
-            for &e in self.lift_elems.get(key).into_iter().flatten() {
+            for &e in self.frame.lift_elems.get(key).into_iter().flatten() {
                 live[e as usize] = true;
                 birth[e as usize] = t0;
             }
@@ -1042,7 +928,7 @@ impl MechanicsModel {
         }
         let mut volumetric = [0.0; 8];
         if let (true, Some((before, after))) = (
-            self.settings.thermal_strain && self.frame.tables.alpha[e] != 0.0,
+            self.frame.settings.thermal_strain && self.frame.tables.alpha[e] != 0.0,
             temps,
         ) {
             let (t_a, t_b) = (
@@ -1054,7 +940,7 @@ impl MechanicsModel {
             }
         }
         if let (Some(law), true) = (
-            &self.settings.concrete.autogenous,
+            &self.frame.settings.concrete.autogenous,
             self.frame.tables.concrete[e],
         ) {
             let dg = law.increment(c.age0, c.age1);
@@ -1073,7 +959,7 @@ impl MechanicsModel {
     /// load.
     fn external_loads(&self, water_level: Option<f64>) -> Result<(Vec<f64>, Vec<f64>), MechError> {
         let mut df_ext = vec![0.0; self.state.u.len()];
-        if self.settings.self_weight {
+        if self.frame.settings.self_weight {
             for el in &self.sys.elements {
                 let e = el.elem as usize;
                 if !self.state.weight_applied[e] {
@@ -1186,7 +1072,7 @@ impl MechanicsModel {
             &step,
             &mut self.sys,
             &mut self.state.joints,
-            &self.joint_settings,
+            &self.frame.joint_settings,
             prepared,
         )
         .map_err(|source| MechError::Joints { day, source })?;
@@ -1253,7 +1139,7 @@ impl MechanicsModel {
                     creep::commit(&mut self.state.creep[8 * e + g], c, nu, &ds);
                 }
             }
-            if self.settings.self_weight {
+            if self.frame.settings.self_weight {
                 self.state.weight_applied[e] = true;
             }
         }
@@ -1367,7 +1253,7 @@ impl MechanicsModel {
             if pair.nodes_a[k] == pair.nodes_b[k] {
                 continue;
             }
-            let p = *self.point_of_a.get(&pair.nodes_a[k])? as usize;
+            let p = *self.frame.point_of_a.get(&pair.nodes_a[k])? as usize;
             let st = &self.state.joints[p];
             if !st.paired {
                 return None;
@@ -1399,7 +1285,8 @@ impl MechanicsModel {
     /// the aperture field over its samples ([`super::grout_stops`]). None
     /// until both blocks exist at one of them.
     pub fn zone_min_aperture(&self, joint: u32, zone: u32) -> Option<ZoneMinimum> {
-        self.zone_stop_samples
+        self.frame
+            .zone_stop_samples
             .get(&(joint, zone))?
             .iter()
             .filter_map(|s| self.sample_aperture(s))
@@ -1494,80 +1381,9 @@ struct Prescribed {
     condensed: Vec<(u32, f64)>,
 }
 
-/// The rock to condense once per run and the seconds it took: with
-/// `solver.condense_rock`, the construction ordering, no tied rock and some
-/// column frozen ([`super::rock_condensation`]).
-fn condensed_rock(
-    mesh: &Mesh,
-    settings: &MechanicsSettings,
-    tables: &ElementTables,
-    ordering: &OrderingPlan,
-    points: &[JointPoint],
-    supported: &[bool],
-    ties: &Ties,
-) -> Result<Option<(CondensedRock, f64)>, MechError> {
-    let OrderingPlan::Construction(c) = ordering else {
-        return Ok(None);
-    };
-    if !settings.condense_rock || ties.count() > 0 {
-        return Ok(None);
-    }
-    let t = Instant::now();
-    let rock: Vec<bool> = tables.concrete.iter().map(|&c| !c).collect();
-    let mut rock_only = vec![true; mesh.nodes.len()];
-    let mut used = vec![false; mesh.nodes.len()];
-    for (e, conn) in mesh.elements.iter().enumerate() {
-        for &v in conn {
-            used[v as usize] = true;
-            rock_only[v as usize] &= rock[e];
-        }
-    }
-    let frozen = c
-        .frozen(&mesh.elements, points, &|v| used[v] && rock_only[v])
-        .map_err(|source| MechError::Live { day: 0.0, source })?;
-    let elements = RockElements {
-        conn: &mesh.elements,
-        rock: &rock,
-        k_unit: &tables.k_unit,
-        modulus: tables.rock_modulus,
-        supported,
-    };
-    let condensed = CondensedRock::new(&elements, &frozen).map_err(MechError::Condensation)?;
-    Ok(condensed.map(|r| (r, t.elapsed().as_secs_f64())))
-}
-
 fn factor_ahead(settings: &MechanicsSettings) -> bool {
     let j = &settings.joint;
     settings.factor_ahead && j.capacitance && j.solver == crate::scene::ContactSolverKind::ActiveSet
-}
-
-/// The joint solver's settings for `mesh`. Gaps are compared to 1e-10 of
-/// the model's size, forces to 1e-9 of the step's largest force: the same
-/// decisions in m/N and mm/MPa units.
-fn joint_solve_settings(mesh: &Mesh, joint: &JointMechanics) -> JointSolveSettings {
-    let (lo, hi) = mesh
-        .nodes
-        .iter()
-        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
-            (
-                std::array::from_fn(|k| lo[k].min(p[k])),
-                std::array::from_fn(|k| hi[k].max(p[k])),
-            )
-        });
-    let size = (0..3)
-        .map(|k| (hi[k] - lo[k]).max(0.0).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    JointSolveSettings {
-        method: joint.solver,
-        mu_static: joint.mu_static,
-        mu_kinetic: joint.mu_kinetic,
-        max_iterations: joint.max_iterations,
-        gap_tolerance: 1e-10 * size,
-        force_tolerance: 1e-9,
-        bond_strength: joint.bond_strength_pa,
-        capacitance: joint.capacitance,
-    }
 }
 
 #[cfg(test)]

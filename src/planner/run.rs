@@ -7,7 +7,7 @@ use std::sync::{Arc, OnceLock};
 
 use chrono::NaiveDate;
 
-use crate::mechanics::MechanicsModel;
+use crate::mechanics::Frame;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::{DamLayout, Schedules};
@@ -31,9 +31,9 @@ pub struct PlannedRun {
     pub plan: Plan,
     pub history: History,
     pub checkpoints: Vec<Checkpoint>,
-    /// the scene's mechanical model before its first pour, kept from the
-    /// first what-if for the next ones ([`Runner::with_blank`])
-    blank: OnceLock<MechanicsModel>,
+    /// the scene's mechanical frame, kept from the first what-if for the
+    /// next ones ([`Runner::with_frame`])
+    frame: OnceLock<Arc<Frame>>,
 }
 
 impl PlannedRun {
@@ -55,7 +55,7 @@ impl PlannedRun {
             plan,
             history,
             checkpoints,
-            blank: OnceLock::new(),
+            frame: OnceLock::new(),
         }
     }
 
@@ -91,7 +91,6 @@ impl PlannedRun {
         cancel: Option<Arc<AtomicBool>>,
         progress: &mut dyn FnMut(f64, f64),
     ) -> Result<WhatIfOutcome, SimError> {
-        let blank = self.blank.get().map(MechanicsModel::fresh).transpose()?;
         let runner = Runner::from_parts(
             &self.scene,
             &self.mesh,
@@ -99,10 +98,10 @@ impl PlannedRun {
             self.checkpoints.clone(),
             self.history.clone(),
         )
-        .with_blank(blank);
+        .with_frame(self.frame.get().cloned());
         let outcome = whatif::run(&runner, &self.layout, self.plan.as_of, w, cancel, progress);
-        if let Some(m) = runner.into_blank() {
-            let _ = self.blank.set(m);
+        if let Some(f) = runner.into_frame() {
+            let _ = self.frame.set(f);
         }
         outcome
     }

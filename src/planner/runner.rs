@@ -3,9 +3,9 @@
 //! or before the first date the edit changes.
 
 use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
-use crate::mechanics::MechanicsModel;
+use crate::mechanics::Frame;
 use crate::mesh::Mesh;
 use crate::scene::Scene;
 use crate::schedule::Schedules;
@@ -32,11 +32,10 @@ pub struct Runner<'a> {
     /// the scene with its thermal effects alone, made on first use
     /// ([`Runner::simulate_temperatures`])
     thermal_scene: OnceLock<Scene>,
-    /// the scene's mechanical model before its first pour, which every
-    /// re-simulation with mechanics starts from a copy of
-    /// ([`MechanicsModel::fresh`]): the baseline's, or the first
-    /// re-simulation's when the runner was made from a run folder
-    blank: OnceLock<MechanicsModel>,
+    /// the scene's mechanical frame, which every re-simulation with
+    /// mechanics is made on ([`Simulation::like`]): the baseline's, or the
+    /// first re-simulation's when the runner was made from a run folder
+    frame: OnceLock<Arc<Frame>>,
 }
 
 /// Which checkpoints the baseline keeps.
@@ -118,8 +117,8 @@ impl<'a> Runner<'a> {
             std::mem::take(&mut sim.checkpoints),
             sim.history(),
         );
-        if let Some(m) = sim.fresh_mechanics()? {
-            let _ = runner.blank.set(m);
+        if let Some(frame) = sim.mechanics_frame() {
+            let _ = runner.frame.set(frame);
         }
         Ok((runner, stats))
     }
@@ -143,24 +142,23 @@ impl<'a> Runner<'a> {
             lineages: Vec::new(),
             resimulations: AtomicUsize::new(0),
             thermal_scene: OnceLock::new(),
-            blank: OnceLock::new(),
+            frame: OnceLock::new(),
         }
     }
 
-    /// This runner, its re-simulations starting from `blank` (a model of
-    /// its scene and mesh before the first pour, [`MechanicsModel::fresh`]
-    /// of another run of them) when given.
-    pub fn with_blank(self, blank: Option<MechanicsModel>) -> Self {
-        if let Some(m) = blank {
-            let _ = self.blank.set(m);
+    /// This runner, its re-simulations made on `frame` (the mechanical
+    /// frame of another run of its scene and mesh) when given.
+    pub fn with_frame(self, frame: Option<Arc<Frame>>) -> Self {
+        if let Some(f) = frame {
+            let _ = self.frame.set(f);
         }
         self
     }
 
-    /// The model re-simulations with mechanics start from a copy of, once
-    /// the baseline or a first re-simulation has made it.
-    pub fn into_blank(self) -> Option<MechanicsModel> {
-        self.blank.into_inner()
+    /// The mechanical frame re-simulations are made on, once the baseline
+    /// or a first re-simulation has made it.
+    pub fn into_frame(self) -> Option<Arc<Frame>> {
+        self.frame.into_inner()
     }
 
     /// Simulates `schedules` over `span`, restarting from the latest baseline
@@ -336,8 +334,8 @@ impl<'a> Runner<'a> {
     }
 
     /// A run of `scene` (this runner's, or its thermal part) over
-    /// `schedules`, not started: its mechanics a copy of the blank model
-    /// when there is one, else built, and kept as the blank.
+    /// `schedules`, not started: its mechanics made on the runner's frame
+    /// when there is one, else built, and its frame kept.
     fn start<'s>(
         &'s self,
         scene: &'s Scene,
@@ -346,12 +344,12 @@ impl<'a> Runner<'a> {
         if !scene.any_mechanical() || !std::ptr::eq(scene, self.scene) {
             return Simulation::new(scene, self.mesh, schedules);
         }
-        if let Some(blank) = self.blank.get() {
-            return Simulation::like(scene, self.mesh, schedules, blank.fresh()?);
+        if let Some(frame) = self.frame.get() {
+            return Simulation::like(scene, self.mesh, schedules, Arc::clone(frame));
         }
         let sim = Simulation::new(scene, self.mesh, schedules)?;
-        if let Some(m) = sim.fresh_mechanics()? {
-            let _ = self.blank.set(m);
+        if let Some(frame) = sim.mechanics_frame() {
+            let _ = self.frame.set(frame);
         }
         Ok(sim)
     }

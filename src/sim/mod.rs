@@ -12,10 +12,12 @@ pub mod checkpoint;
 pub mod snapshot;
 pub mod timeline;
 
+use std::sync::Arc;
+
 use chrono::NaiveDate;
 
 use crate::mechanics::ahead::NextStep;
-use crate::mechanics::{MechError, MechStats, MechanicsModel, Supports};
+use crate::mechanics::{Frame, MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene, TimeStepping};
 use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
@@ -195,31 +197,31 @@ impl<'a> Simulation<'a> {
         Self::on(scene, mesh, schedules, None)
     }
 
-    /// [`Simulation::new`] whose mechanics starts as `like`, a model of
-    /// this scene and mesh before its first pour
-    /// ([`MechanicsModel::fresh`]), instead of being built: a re-simulation
-    /// of a scene skips its construction ordering and rock condensation.
-    /// `like` is not used when the scene has no mechanics.
+    /// [`Simulation::new`] whose mechanics is made on `frame`, the
+    /// mechanical frame of another run of this scene and mesh
+    /// ([`Simulation::mechanics_frame`]), instead of building its own: a
+    /// re-simulation of a scene skips its construction ordering and rock
+    /// condensation. `frame` is not used when the scene has no mechanics.
     pub fn like(
         scene: &'a Scene,
         mesh: &'a Mesh,
         schedules: &Schedules,
-        like: MechanicsModel,
+        frame: Arc<Frame>,
     ) -> Result<Self, SimError> {
-        Self::on(scene, mesh, schedules, Some(like))
+        Self::on(scene, mesh, schedules, Some(frame))
     }
 
-    /// A model of this run's scene and mesh before its first pour, on its
-    /// frame, for [`Simulation::like`]; None without mechanics.
-    pub fn fresh_mechanics(&self) -> Result<Option<MechanicsModel>, SimError> {
-        Ok(self.mechanics.as_ref().map(|m| m.fresh()).transpose()?)
+    /// This run's mechanical frame, for [`Simulation::like`]; None without
+    /// mechanics.
+    pub fn mechanics_frame(&self) -> Option<Arc<Frame>> {
+        self.mechanics.as_ref().map(MechanicsModel::frame)
     }
 
     fn on(
         scene: &'a Scene,
         mesh: &'a Mesh,
         schedules: &Schedules,
-        like: Option<MechanicsModel>,
+        frame: Option<Arc<Frame>>,
     ) -> Result<Self, SimError> {
         check_memory(scene, mesh)?;
         let epoch = scene.epoch;
@@ -255,8 +257,8 @@ impl<'a> Simulation<'a> {
         };
         let mechanics = if !scene.any_mechanical() {
             None
-        } else if let Some(m) = like {
-            Some(m)
+        } else if let Some(frame) = frame {
+            Some(MechanicsModel::on_frame(frame)?)
         } else {
             Some(MechanicsModel::new(
                 mesh,

@@ -471,13 +471,13 @@ fn a_run_keeps_a_checkpoint_on_the_day_it_is_told() {
     assert_eq!(after.first(), Some(&Day(130)), "{told:?}");
 }
 
-/// A re-simulation starts its mechanics as a copy of a blank model of the
-/// scene (`MechanicsModel::fresh`) instead of building one: no construction
+/// A re-simulation makes its mechanics on the frame of another run of the
+/// scene (`Simulation::like`) instead of building one: no construction
 /// ordering, no rock condensation, and the same run to the bit — on its
 /// own and through the planner's runner (whose first re-simulation builds
-/// the blank it keeps, the second copies it).
+/// the frame it keeps, the second shares it).
 #[test]
-fn a_run_on_a_copied_blank_model_is_the_run_on_a_built_one() {
+fn a_run_on_a_shared_frame_is_the_run_on_a_built_one() {
     use groutready::planner::runner::Span;
     let inputs = inputs();
     let (scene, mesh) = (&inputs.scene, &inputs.mesh);
@@ -488,31 +488,28 @@ fn a_run_on_a_copied_blank_model_is_the_run_on_a_built_one() {
         (sim.history(), stats.mechanics.expect("mechanics"))
     };
     let built = Simulation::new(scene, mesh, &inputs.schedules).unwrap();
-    let blank = built
-        .fresh_mechanics()
-        .unwrap()
-        .expect("a scene with mechanics");
-    let copied = Simulation::like(scene, mesh, &inputs.schedules, blank).unwrap();
+    let frame = built.mechanics_frame().expect("a scene with mechanics");
+    let shared = Simulation::like(scene, mesh, &inputs.schedules, frame).unwrap();
     let (h_built, s_built) = run_to_end(built);
-    let (h_copied, s_copied) = run_to_end(copied);
+    let (h_shared, s_shared) = run_to_end(shared);
     println!(
-        "built: {} METIS calls, {} rock dofs condensed in {:.3} s; copied: {} calls, {} dofs, {:.3} s",
+        "built: {} METIS calls, {} rock dofs condensed in {:.3} s; shared: {} calls, {} dofs, {:.3} s",
         s_built.metis_calls,
         s_built.condensed_dofs,
         s_built.seconds_condensation,
-        s_copied.metis_calls,
-        s_copied.condensed_dofs,
-        s_copied.seconds_condensation
+        s_shared.metis_calls,
+        s_shared.condensed_dofs,
+        s_shared.seconds_condensation
     );
     assert_eq!(s_built.metis_calls, 1);
     assert!(s_built.condensed_dofs > 0 && s_built.seconds_condensation > 0.0);
-    assert_eq!(s_copied.metis_calls, 0, "the copy ordered the dam again");
+    assert_eq!(s_shared.metis_calls, 0, "the shared frame ordered again");
     assert_eq!(
-        s_copied.seconds_condensation, 0.0,
-        "the copy condensed again"
+        s_shared.seconds_condensation, 0.0,
+        "the shared frame condensed again"
     );
-    assert_eq!(s_copied.condensed_dofs, s_built.condensed_dofs);
-    assert!(bytes(&h_built) == bytes(&h_copied), "the runs differ");
+    assert_eq!(s_shared.condensed_dofs, s_built.condensed_dofs);
+    assert!(bytes(&h_built) == bytes(&h_shared), "the runs differ");
 
     let base = run(&inputs, &inputs.schedules, None);
     let runner = runner(&inputs, &base);

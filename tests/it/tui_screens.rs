@@ -498,10 +498,10 @@ fn joint_meter_readings_are_drawn_on_the_zone_chart() {
     assert_eq!(drawn, 2, "{text}");
 }
 
-/// A what-if after the first starts its mechanics as a copy of the model
-/// the first one made (`Runner::with_blank`): the same answer to the bit.
+/// A what-if after the first makes its mechanics on the frame the first
+/// one made (`Runner::with_frame`): the same answer to the bit.
 #[test]
-fn a_second_what_if_on_the_kept_model_gives_the_first_ones_answer() {
+fn a_second_what_if_on_the_kept_frame_gives_the_first_ones_answer() {
     let p = common::small_plan();
     assert_eq!(p.output.status.code(), Some(0), "{}", p.stderr());
     let data = RunData::load(&p.out).unwrap();
