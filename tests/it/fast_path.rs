@@ -26,12 +26,18 @@ use groutready::mechanics::MechStats;
 use groutready::sim::{JointRecords, Simulation};
 use groutready::vocab::ZoneId;
 
-fn run(
-    capacitance: bool,
-    condense_rock: bool,
-    mechanics_step_days: u32,
-) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
+fn run(capacitance: bool, condense_rock: bool, mechanics_step_days: u32) -> Run {
     run_with(capacitance, condense_rock, mechanics_step_days, 0)
+}
+
+/// What [`run`] gives.
+type Run = (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>);
+
+/// The run with the defaults (capacitance correction, the rock condensed,
+/// daily steps), made once for the tests that compare with it.
+fn defaults() -> &'static Run {
+    static RUN: std::sync::OnceLock<Run> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| run(true, true, 1))
 }
 
 fn run_with(
@@ -39,7 +45,7 @@ fn run_with(
     condense_rock: bool,
     mechanics_step_days: u32,
     layer_merging_age_days: u32,
-) -> (JointRecords, MechStats, Vec<(ZoneId, chrono::NaiveDate)>) {
+) -> Run {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut inputs = app::load_inputs(&root.join("models/small_dam_joints.toml"), None).unwrap();
     inputs.scene.solver.contact_capacitance = capacitance;
@@ -103,7 +109,7 @@ fn at_grouting_dates(
 fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
     let (exact, exact_stats, dates) = run(false, false, 1);
     let (fast, fast_stats, _) = run(true, false, 1);
-    let (condensed, condensed_stats, _) = run(true, true, 1);
+    let (condensed, condensed_stats, _) = defaults();
     let (long, long_stats, _) = run(true, true, 3);
 
     let (compared, largest, differ) = at_grouting_dates(&fast, &exact, &dates);
@@ -215,7 +221,7 @@ const LONG_STEP_BOUND_M: f64 = 0.7e-3;
 /// the apertures at the grouting dates within a measured bound.
 #[test]
 fn layer_merging_against_the_untied_run_at_the_grouting_dates() {
-    let (untied, untied_stats, dates) = run(true, true, 1);
+    let (untied, untied_stats, dates) = defaults();
     let (merged, merged_stats, _) = run_with(true, true, 1, MERGING_AGE_DAYS);
     // never old enough within the run: the blocks' grid lines are straight,
     // so nothing moves and nothing is tied; only the elimination order is
