@@ -162,7 +162,7 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
     // (8.6e-8 mm), and the friction carries it on (738 contact passes in
     // all against 694, 28 Nov 2026). Its bound is the iteration's, far below
     // the 0.01 mm the planner needs.
-    let (_, largest, differ) = at_grouting_dates(&condensed, &exact, &dates);
+    let (_, largest, differ) = at_grouting_dates(condensed, &exact, &dates);
     eprintln!(
         "rock condensed once ({} unknowns, {} solves with its factor): apertures differ by at most {:.2e} mm, \
          {differ} states differ; {:.1} against {:.1} Gflop of factorisation, {} against {} contact passes",
@@ -228,11 +228,11 @@ fn layer_merging_against_the_untied_run_at_the_grouting_dates() {
     // the merged dam's, so the answer is the same to the contact
     // iteration's tolerance (as the condensed rock's above: 4.6e-6 mm)
     let (never, never_stats, _) = run_with(true, true, 1, 100_000);
-    let (_, largest, _) = at_grouting_dates(&never, &untied, &dates);
+    let (_, largest, _) = at_grouting_dates(&never, untied, dates);
     assert!(largest <= 1e-8, "{:.3e} mm", 1e3 * largest);
     assert_eq!(never_stats.max_dofs, untied_stats.max_dofs, "nothing tied");
     assert!(merged_stats.max_dofs < untied_stats.max_dofs, "nodes tied");
-    let (compared, largest, differ) = at_grouting_dates(&merged, &untied, &dates);
+    let (compared, largest, differ) = at_grouting_dates(&merged, untied, dates);
     eprintln!(
         "layer merging after {MERGING_AGE_DAYS} d: {compared} zone samples at their grouting dates: apertures differ by at most {:.4} mm, \
          {differ} states differ; {:.2} against {:.2} Gflop of factorisation, {} against {} symbolic analyses",
