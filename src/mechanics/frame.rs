@@ -117,23 +117,7 @@ impl Frame {
             seconds_ordering: 0.0,
             seconds_condensation: 0.0,
         };
-        let ordering = match settings.ordering {
-            OrderingKind::Amd => OrderingPlan::Amd,
-            OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
-            OrderingKind::Metis => {
-                let c = ConstructionOrdering::new(
-                    &mesh.elements,
-                    &points,
-                    mesh.nodes.len(),
-                    &ties,
-                    &merge,
-                )
-                .map_err(|source| MechError::Live { day: 0.0, source })?;
-                costs.metis_calls += 1;
-                costs.seconds_ordering += c.seconds;
-                OrderingPlan::Construction(Arc::new(c))
-            }
-        };
+        let ordering = ordering_plan(mesh, settings, &points, &ties, &merge, &mut costs)?;
         let rock = condensed_rock(
             mesh, settings, &tables, &ordering, &points, &supported, &ties,
         )?;
@@ -317,6 +301,30 @@ impl Frame {
             born,
         })
     }
+}
+
+/// How the live sets of `mesh` are ordered (`solver.ordering`); the
+/// construction ordering's METIS call is counted in `costs`.
+fn ordering_plan(
+    mesh: &Mesh,
+    settings: &MechanicsSettings,
+    points: &[JointPoint],
+    ties: &Ties,
+    merge: &LayerMerge,
+    costs: &mut FrameCosts,
+) -> Result<OrderingPlan, MechError> {
+    Ok(match settings.ordering {
+        OrderingKind::Amd => OrderingPlan::Amd,
+        OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
+        OrderingKind::Metis => {
+            let c =
+                ConstructionOrdering::new(&mesh.elements, points, mesh.nodes.len(), ties, merge)
+                    .map_err(|source| MechError::Live { day: 0.0, source })?;
+            costs.metis_calls += 1;
+            costs.seconds_ordering += c.seconds;
+            OrderingPlan::Construction(Arc::new(c))
+        }
+    })
 }
 
 /// The rock to condense once per run and the seconds it took: with
