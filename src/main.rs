@@ -232,6 +232,12 @@ fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
     }
 }
 
+/// The large arch's factors and matrices on huge pages
+/// ([`groutready::machine::LargeBlocksOnHugePages`]).
+#[global_allocator]
+static ALLOCATOR: groutready::machine::LargeBlocksOnHugePages =
+    groutready::machine::LargeBlocksOnHugePages;
+
 /// Exit code of a plan with `--fail-on-flag` and a zone not groutable.
 const EXIT_FLAGGED: u8 = 3;
 
