@@ -180,6 +180,11 @@ enum StudyCommand {
         /// change refactorised) and its comparison with the fast path.
         #[arg(long)]
         no_exact: bool,
+        /// Time one scene's run from the restart point an interrupted
+        /// `groutready run --out RUN` kept (`.RUN.resume`), --days counted
+        /// from there: a long run's late days without its first months.
+        #[arg(long, value_name = "RUN")]
+        resume: Option<PathBuf>,
     },
 }
 
@@ -314,13 +319,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     solver,
                     complete_mechanics,
                     no_exact,
+                    resume,
                 },
         } => {
             let options = groutready::study::PerfOptions {
                 max_days: days,
                 solvers: groutready::study::parse_solvers(solver.as_deref())?,
                 complete_mechanics,
-                exact: !no_exact,
+                exact: !no_exact && resume.is_none(),
+                resume,
             };
             study_perf(scenes, quick, options)
         }
@@ -487,7 +494,7 @@ fn study_perf(
         scenes
     };
     groutready::study::perf(&scenes, &options)?;
-    if defaults && !quick {
+    if defaults && !quick && options.resume.is_none() {
         // The large arch's whole construction with mechanics takes
         // hours: its first 40 days (17 mechanical steps on a 171k-dof
         // system) and its complete-dam steps; no exact-path rerun.

@@ -318,6 +318,12 @@ impl<'a> Simulation<'a> {
         })
     }
 
+    /// Thermal steps and pours made so far, those before a restored
+    /// checkpoint included.
+    pub fn steps_and_pours(&self) -> (usize, usize) {
+        (self.steps, self.pours_done)
+    }
+
     pub fn end_day(&self) -> Day {
         self.timeline.end_day
     }

@@ -62,6 +62,13 @@ pub enum StudyError {
     },
     #[error("--solver: expected cholesky, pcg or both, found {0:?}")]
     Solver(String),
+    /// `study perf --resume RUN` where RUN has no restart point this scene,
+    /// its schedules and this program can continue from.
+    #[error("--resume {run}: no restart point of an interrupted `groutready run --out {run}` of this scene, its schedules and this program in {dir}")]
+    NoRestart { run: String, dir: String },
+    /// `study perf --resume` with more than one scene.
+    #[error("--resume times one scene's interrupted run: give exactly one scene, found {0}")]
+    ResumeScenes(usize),
     /// `study accuracy --knobs` naming a knob the scene's ladder lacks.
     #[error("--knobs: {0}")]
     Knob(String),
@@ -96,6 +103,11 @@ pub struct PerfOptions {
     /// For a scene with joints, run the exact path too (every contact-set
     /// change refactorised) and compare the apertures at the grouting dates.
     pub exact: bool,
+    /// Start the staged run from the restart point that an interrupted
+    /// `groutready run --out RUN` keeps beside RUN ([`app::resume`]), and
+    /// count `max_days` from there: a long run's late days timed without
+    /// its first months. One scene, no exact path, complete dam or plan.
+    pub resume: Option<PathBuf>,
 }
 
 /// Times the staged history of each scene (no files written), then the
@@ -113,7 +125,11 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
         ref solvers,
         complete_mechanics,
         exact,
+        ref resume,
     } = *options;
+    if resume.is_some() && scenes.len() != 1 {
+        return Err(StudyError::ResumeScenes(scenes.len()));
+    }
     println!(
         "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "scene/solver",
@@ -152,6 +168,10 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 scene: &scene,
                 mesh: &mesh,
             };
+            if let Some(run) = resume {
+                timed.resumed_run(&schedules, run, max_days, load_s)?;
+                continue;
+            }
             let fast = timed.staged_run(&schedules, max_days, load_s)?;
             let fast_path = scene.solver.contact_capacitance
                 || scene.solver.condense_rock
@@ -178,6 +198,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
         // The planner's cost where the whole construction was timed: the
         // same scene planned from scratch (baseline and remedy searches).
         if max_days.is_none()
+            && resume.is_none()
             && own_schedules(&scene0, path).is_some()
             && scene0.has(Effect::Joints)
             && !schedules.grouting.is_empty()
@@ -267,12 +288,59 @@ impl Timed<'_> {
         max_days: Option<f64>,
         load_s: f64,
     ) -> Result<JointRecords, StudyError> {
-        let (scene, mesh) = (self.scene, self.mesh);
-        let mut sim = Simulation::new(scene, mesh, schedules).map_err(self.run_err(""))?;
+        let mut sim =
+            Simulation::new(self.scene, self.mesh, schedules).map_err(self.run_err(""))?;
         if let Some(days) = max_days {
             sim.timeline.end_day = sim.timeline.end_day.min(Day(days as i64));
         }
-        let stats = sim.run(None, &mut |_, _| {}).map_err(self.run_err(""))?;
+        self.timed_run(sim, load_s)
+    }
+
+    /// [`Timed::staged_run`] from the restart point of the interrupted run
+    /// into `run` (its days counted from there).
+    fn resumed_run(
+        &self,
+        schedules: &schedule::Schedules,
+        run: &Path,
+        max_days: Option<f64>,
+        load_s: f64,
+    ) -> Result<JointRecords, StudyError> {
+        let mut sim =
+            Simulation::new(self.scene, self.mesh, schedules).map_err(self.run_err(""))?;
+        let dir = app::resume::dir_of(run);
+        let found = app::restart::find(&dir, self.scene, schedules, sim.end_day());
+        let Some(previous) = found.previous else {
+            return Err(StudyError::NoRestart {
+                run: run.display().to_string(),
+                dir: dir.display().to_string(),
+            });
+        };
+        let restart = previous.restart;
+        sim.restore(&restart.checkpoint, &restart.history);
+        let from = restart.checkpoint.day;
+        drop(restart);
+        println!(
+            "{:<22} resumed from day {} ({}), the restart point in {}",
+            "",
+            from.0,
+            self.scene.epoch.date(from),
+            dir.display()
+        );
+        if let Some(days) = max_days {
+            sim.timeline.end_day = sim.timeline.end_day.min(Day(from.0 + days as i64));
+        }
+        self.timed_run(sim, load_s)
+    }
+
+    /// Runs `sim` to its end and prints the figures of
+    /// [`Timed::staged_run`].
+    fn timed_run(&self, mut sim: Simulation<'_>, load_s: f64) -> Result<JointRecords, StudyError> {
+        let mesh = self.mesh;
+        // a restored run counts from its checkpoint
+        let (steps0, pours0) = sim.steps_and_pours();
+        let mut stats = sim.run(None, &mut |_, _| {}).map_err(self.run_err(""))?;
+        stats.steps -= steps0;
+        stats.pours -= pours0;
         let t = stats.thermal.unwrap_or_default();
         println!(
             "{:<22} {:>8} {:>9} {:>6} {:>6} {:>6} {:>7} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2}",

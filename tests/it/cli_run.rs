@@ -454,14 +454,9 @@ fn run_again(scene: &Path, out: &Path, args: &[&str]) -> String {
     err
 }
 
-/// A run killed on the way continues from its restart point when run
-/// again, and writes what a run from day 0 writes, byte for byte (the
-/// temperatures, the apertures with their states, every field file, those
-/// written before the restart point too); with `--from-scratch` it starts
-/// from day 0 and removes the restart point.
-#[test]
-fn a_killed_run_continues_from_its_restart_point() {
-    let tmp = tempfile::tempdir().unwrap();
+/// The small dam with joints in `dir`, its first restart point after
+/// months of histories and a snapshot (day 120).
+fn small_dam_restarting_at_day_120(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(repo("models/small_dam_joints.toml"))
         .unwrap()
         .replace(
@@ -472,10 +467,101 @@ fn a_killed_run_continues_from_its_restart_point() {
             "snapshots = [2024-07-01]",
             "snapshots = [2024-01-05, 2024-03-01, 2024-07-01]",
         )
-        // the first restart point after months of histories and a snapshot
         + "\n[planner]\ncheckpoint_days = 120\n";
-    let scene = tmp.path().join("scene.toml");
+    let scene = dir.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
+    scene
+}
+
+/// `study perf --resume RUN --days N` times N days from the restart point
+/// of an interrupted run into RUN (a long run's late days), and leaves the
+/// restart point as it was; a folder without one is refused by name.
+#[test]
+fn study_perf_times_an_interrupted_run_from_its_restart_point() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = small_dam_restarting_at_day_120(tmp.path());
+    let run = tmp.path().join("runs").join("long");
+    killed_after_first_restart_point(&scene, &run);
+    let restart = tmp.path().join("runs").join(".long.resume").join("restart");
+    let listing = |d: &Path| -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    e.metadata().unwrap().len(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing(&restart);
+    let o = bin()
+        .args(["study", "perf"])
+        .arg(&scene)
+        .arg("--resume")
+        .arg(&run)
+        .args(["--days", "10"])
+        .output()
+        .unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{out}{err}");
+    let number_after = |key: &str| -> u64 {
+        let at = out
+            .find(key)
+            .unwrap_or_else(|| panic!("no {key:?} in {out}"))
+            + key.len();
+        out[at..]
+            .split(|c: char| !c.is_ascii_digit())
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let from = number_after("resumed from day ");
+    assert!((100..=140).contains(&from), "{out}");
+    assert!(
+        out.contains(&format!("{} days simulated", from + 10)),
+        "{out}"
+    );
+    // the ten days' mechanical steps only, none of the 100 days before
+    let steps = number_after("mechanics: ");
+    assert!((1..=10).contains(&steps), "{out}");
+    assert!(
+        !out.contains("exact"),
+        "no exact path from a restart point: {out}"
+    );
+    assert_eq!(listing(&restart), before, "the restart point was changed");
+
+    let o = bin()
+        .args(["study", "perf"])
+        .arg(&scene)
+        .arg("--resume")
+        .arg(tmp.path().join("runs").join("never"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("no restart point") && err.contains(".never.resume"),
+        "{err}"
+    );
+}
+
+/// A run killed on the way continues from its restart point when run
+/// again, and writes what a run from day 0 writes, byte for byte (the
+/// temperatures, the apertures with their states, every field file, those
+/// written before the restart point too); with `--from-scratch` it starts
+/// from day 0 and removes the restart point.
+#[test]
+fn a_killed_run_continues_from_its_restart_point() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = small_dam_restarting_at_day_120(tmp.path());
     let runs = tmp.path().join("runs");
     let (resumed, scratch) = (runs.join("resumed"), runs.join("scratch"));
     killed_after_first_restart_point(&scene, &resumed);
