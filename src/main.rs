@@ -326,7 +326,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 max_days: days,
                 solvers: groutready::study::parse_solvers(solver.as_deref())?,
                 complete_mechanics,
-                exact: !no_exact && resume.is_none(),
+                exact: !no_exact,
                 resume,
             };
             study_perf(scenes, quick, options)

@@ -168,11 +168,12 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 scene: &scene,
                 mesh: &mesh,
             };
-            if let Some(run) = resume {
-                timed.resumed_run(&schedules, run, max_days, load_s)?;
+            let fast = timed.staged_run(&schedules, resume.as_deref(), max_days, load_s)?;
+            // a resumed run times the late days only: no exact path, no
+            // complete dam
+            if resume.is_some() {
                 continue;
             }
-            let fast = timed.staged_run(&schedules, max_days, load_s)?;
             let fast_path = scene.solver.contact_capacitance
                 || scene.solver.condense_rock
                 || scene.time.mechanics_max_step_days > 1;
@@ -186,7 +187,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                     scene: &exact_scene,
                     ..timed.clone()
                 }
-                .staged_run(&schedules, max_days, load_s)?;
+                .staged_run(&schedules, None, max_days, load_s)?;
                 let c = compare_at_grouting_dates(&fast, &exact_run, &schedules, scene.epoch);
                 println!(
                     "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ",
@@ -279,36 +280,44 @@ impl Timed<'_> {
         move |source| StudyError::Run { what, source }
     }
 
-    /// The staged history up to `max_days`: the table's row, then the load
-    /// time and solver counters, then the mechanics' own figures. Returns
-    /// the joint history.
+    /// The staged history up to `max_days` (counted from the restart point
+    /// of the interrupted run into `resume`, when given): the table's row,
+    /// then the load time and solver counters, then the mechanics' own
+    /// figures. Returns the joint history.
     fn staged_run(
         &self,
         schedules: &schedule::Schedules,
+        resume: Option<&Path>,
         max_days: Option<f64>,
         load_s: f64,
     ) -> Result<JointRecords, StudyError> {
         let mut sim =
             Simulation::new(self.scene, self.mesh, schedules).map_err(self.run_err(""))?;
+        let from = match resume {
+            Some(run) => self.restore(&mut sim, schedules, run)?,
+            None => Day(0),
+        };
         if let Some(days) = max_days {
-            sim.timeline.end_day = sim.timeline.end_day.min(Day(days as i64));
+            sim.timeline.end_day = sim.timeline.end_day.min(Day(from.0 + days as i64));
         }
         self.timed_run(sim, load_s)
     }
 
-    /// [`Timed::staged_run`] from the restart point of the interrupted run
-    /// into `run` (its days counted from there).
-    fn resumed_run(
+    /// Restores `sim` from the restart point of the interrupted run into
+    /// `run`, as `groutready run` would continue it (the damaged files it
+    /// passed over are printed as `run` prints them); returns the day
+    /// restored.
+    fn restore(
         &self,
+        sim: &mut Simulation<'_>,
         schedules: &schedule::Schedules,
         run: &Path,
-        max_days: Option<f64>,
-        load_s: f64,
-    ) -> Result<JointRecords, StudyError> {
-        let mut sim =
-            Simulation::new(self.scene, self.mesh, schedules).map_err(self.run_err(""))?;
+    ) -> Result<Day, StudyError> {
         let dir = app::resume::dir_of(run);
         let found = app::restart::find(&dir, self.scene, schedules, sim.end_day());
+        for w in &found.damaged {
+            println!("{:<22} warning: {w}", "");
+        }
         let Some(previous) = found.previous else {
             return Err(StudyError::NoRestart {
                 run: run.display().to_string(),
@@ -318,7 +327,6 @@ impl Timed<'_> {
         let restart = previous.restart;
         sim.restore(&restart.checkpoint, &restart.history);
         let from = restart.checkpoint.day;
-        drop(restart);
         println!(
             "{:<22} resumed from day {} ({}), the restart point in {}",
             "",
@@ -326,10 +334,7 @@ impl Timed<'_> {
             self.scene.epoch.date(from),
             dir.display()
         );
-        if let Some(days) = max_days {
-            sim.timeline.end_day = sim.timeline.end_day.min(Day(from.0 + days as i64));
-        }
-        self.timed_run(sim, load_s)
+        Ok(from)
     }
 
     /// Runs `sim` to its end and prints the figures of

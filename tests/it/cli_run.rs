@@ -551,6 +551,33 @@ fn study_perf_times_an_interrupted_run_from_its_restart_point() {
         err.contains("no restart point") && err.contains(".never.resume"),
         "{err}"
     );
+
+    // a truncated checkpoint is passed over and said, as `run` says it
+    let checkpoint = std::fs::read_dir(&restart)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with("ck-"))
+        .expect("a checkpoint");
+    let bytes = std::fs::read(&checkpoint).unwrap();
+    std::fs::write(&checkpoint, &bytes[..bytes.len() / 2]).unwrap();
+    let o = bin()
+        .args(["study", "perf"])
+        .arg(&scene)
+        .arg("--resume")
+        .arg(&run)
+        .args(["--days", "10"])
+        .output()
+        .unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    let warning = format!("warning: {}: damaged restart file", checkpoint.display());
+    assert!(out.contains(&warning), "{out}{err}");
+    assert!(
+        !o.status.success() && err.contains("no restart point"),
+        "{err}"
+    );
 }
 
 /// A run killed on the way continues from its restart point when run

@@ -4,6 +4,12 @@
 // Component loops (`for c in 0..3`) read as the formulas they check.
 #![allow(clippy::needless_range_loop)]
 
+/// The in-process runs allocate as the binary does (large blocks on huge
+/// pages), so the tests exercise its allocator too.
+#[global_allocator]
+static ALLOCATOR: groutready::machine::LargeBlocksOnHugePages =
+    groutready::machine::LargeBlocksOnHugePages;
+
 mod common;
 
 mod arch_table;
