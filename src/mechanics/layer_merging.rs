@@ -51,12 +51,14 @@
 //! restricted to a tied set costs 1.5–4 times as much. Its cost is on the
 //! sets still untied: 208.7, 319.6 and 502.6 Gflop against 209.3, 278.2
 //! and 375.9, which is why a run whose concrete is mostly young pays for
-//! merging instead of gaining (the Xiaowan-like first 150 days, README).
+//! merging instead of gaining (the Xiaowan-like first 150 days,
+//! `docs/PERFORMANCE.md`).
 //!
 //! It is an approximation (stiffer than the untied mesh by the energy the
 //! tie removes, and the straightened geometry): its error against the
 //! untied run is measured in `tests/it/fast_path.rs` and, with its time,
-//! in the README ("Layer merging") and `groutready study accuracy`.
+//! in the README (its opt-in approximations), `docs/PERFORMANCE.md` ("Layer
+//! merging") and `groutready study accuracy`.
 
 use crate::mesh::{Mesh, Part};
 

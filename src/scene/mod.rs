@@ -607,7 +607,7 @@ pub enum OrderingKind {
     /// the complete Xiaowan-like arch without pairs (410,904 dofs) 169M
     /// against 248M, 6.1 s against 8.8 s on 2 cores
     /// (`examples/factor_orderings.rs`). The restriction's fill against a
-    /// METIS call per live set is in the README ("Where the time goes").
+    /// METIS call per live set is in `docs/PERFORMANCE.md`.
     Metis,
     /// METIS's nested dissection of each live set's own pattern (one call
     /// per pour: 0.18 s each on the demo).
