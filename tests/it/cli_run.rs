@@ -498,19 +498,24 @@ fn study_perf_times_an_interrupted_run_from_its_restart_point() {
         v
     };
     let before = listing(&restart);
-    let o = bin()
-        .args(["study", "perf"])
-        .arg(&scene)
-        .arg("--resume")
-        .arg(&run)
-        .args(["--days", "10"])
-        .output()
-        .unwrap();
-    let (out, err) = (
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr),
-    );
-    assert!(o.status.success(), "{out}{err}");
+    // ten days timed from the restart point: (success, stdout, stderr)
+    let perf_resumed = || {
+        let o = bin()
+            .args(["study", "perf"])
+            .arg(&scene)
+            .arg("--resume")
+            .arg(&run)
+            .args(["--days", "10"])
+            .output()
+            .unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (ok, out, err) = perf_resumed();
+    assert!(ok, "{out}{err}");
     let number_after = |key: &str| -> u64 {
         let at = out
             .find(key)
@@ -560,24 +565,10 @@ fn study_perf_times_an_interrupted_run_from_its_restart_point() {
         .expect("a checkpoint");
     let bytes = std::fs::read(&checkpoint).unwrap();
     std::fs::write(&checkpoint, &bytes[..bytes.len() / 2]).unwrap();
-    let o = bin()
-        .args(["study", "perf"])
-        .arg(&scene)
-        .arg("--resume")
-        .arg(&run)
-        .args(["--days", "10"])
-        .output()
-        .unwrap();
-    let (out, err) = (
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr),
-    );
+    let (ok, out, err) = perf_resumed();
     let warning = format!("warning: {}: damaged restart file", checkpoint.display());
     assert!(out.contains(&warning), "{out}{err}");
-    assert!(
-        !o.status.success() && err.contains("no restart point"),
-        "{err}"
-    );
+    assert!(!ok && err.contains("no restart point"), "{err}");
 }
 
 /// A run killed on the way continues from its restart point when run
