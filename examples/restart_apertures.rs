@@ -1,4 +1,5 @@
-//! The `apertures.csv` of an interrupted run, read from its restart point:
+//! The `apertures.csv` of an interrupted run, read from its restart point
+//! (the rows `groutready run` writes, up to the restart point's day):
 //! a long run's joint history so far, for `tests/aperture_pattern.py`,
 //! without waiting for its end.
 //!
@@ -29,18 +30,12 @@ fn main() -> anyhow::Result<()> {
         anyhow::bail!("no restart point of this scene in {}", dir.display());
     };
     let epoch = inputs.scene.epoch;
-    let grouting_days = inputs
-        .schedules
-        .grouting
-        .iter()
-        .map(|g| epoch.day(g.planned))
-        .collect();
     let history = &previous.restart.history;
     let rows = groutready::output::apertures::write(
         Path::new(out),
         epoch,
         &history.joint_records,
-        &grouting_days,
+        &inputs.aperture_days(),
     )?;
     println!(
         "{out}: {rows} rows, to day {} ({})",

@@ -79,6 +79,17 @@ pub struct Inputs {
     pub warnings: Vec<schedule::Warning>,
 }
 
+impl Inputs {
+    /// The days a run's `apertures.csv` holds besides its weekly rows: the
+    /// planned grouting dates and the snapshot dates.
+    pub fn aperture_days(&self) -> std::collections::BTreeSet<Day> {
+        let epoch = self.scene.epoch;
+        let grouting = self.schedules.grouting.iter().map(|g| g.planned);
+        let snapshots = self.scene.output.snapshots.iter().copied();
+        grouting.chain(snapshots).map(|d| epoch.day(d)).collect()
+    }
+}
+
 /// Builds the scene's mesh.
 pub fn build_mesh(scene: &Scene, origin: &str) -> Result<Mesh, AppError> {
     let (lift, zone) = (scene.lifts.height_m, scene.joints.zone_height_m);
@@ -266,14 +277,8 @@ pub fn run(
     } else {
         let path = staging.path().join("apertures.csv");
         let epoch = inputs.scene.epoch;
-        let mut extra: std::collections::BTreeSet<Day> = inputs
-            .schedules
-            .grouting
-            .iter()
-            .map(|g| epoch.day(g.planned))
-            .collect();
-        extra.extend(inputs.scene.output.snapshots.iter().map(|d| epoch.day(*d)));
-        output::apertures::write(&path, epoch, &sim.joint_records, &extra).map_err(io_err(&path))?
+        output::apertures::write(&path, epoch, &sim.joint_records, &inputs.aperture_days())
+            .map_err(io_err(&path))?
     };
     let pvd = fields.join("fields.pvd");
     mesh::vtu::write_pvd(&pvd, &written).map_err(io_err(&pvd))?;
