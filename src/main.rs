@@ -158,7 +158,9 @@ enum StudyCommand {
         /// Scene (default: models/demo_arch.toml).
         scene: Option<PathBuf>,
     },
-    /// Thermal run time, steps and factorisations on the demo and the large arch.
+    /// Run time by phase (thermal, mechanics, joints): steps, factorisations,
+    /// contact passes and peak memory of the demo and the large arch, the
+    /// exact path compared, the demo planned.
     Perf {
         /// Scenes to time (default: models/demo_arch.toml, then the first 40
         /// days and the complete-dam steps of models/xiaowan_like.toml).
