@@ -16,27 +16,26 @@ fn main() -> anyhow::Result<()> {
         anyhow::bail!("usage: restart_apertures SCENE RUN OUT.csv");
     };
     let inputs = groutready::app::load_inputs(Path::new(scene), None)?;
-    let dir = groutready::app::resume::dir_of(Path::new(run));
-    let found = groutready::app::restart::find(
-        &dir,
-        &inputs.scene,
-        &inputs.schedules,
-        groutready::vocab::Day(i64::from(i32::MAX)),
-    );
+    let run = Path::new(run);
+    let found = groutready::app::resume::find(run, &inputs.scene, &inputs.schedules, None);
     for w in &found.damaged {
         eprintln!("warning: {w}");
     }
     let Some(previous) = found.previous else {
+        let dir = groutready::app::resume::dir_of(run);
         anyhow::bail!("no restart point of this scene in {}", dir.display());
     };
     let epoch = inputs.scene.epoch;
     let history = &previous.restart.history;
+    // written beside, then renamed: OUT is never left half-written
+    let partial = format!("{out}.partial");
     let rows = groutready::output::apertures::write(
-        Path::new(out),
+        Path::new(&partial),
         epoch,
         &history.joint_records,
         &inputs.aperture_days(),
     )?;
+    std::fs::rename(&partial, out)?;
     println!(
         "{out}: {rows} rows, to day {} ({})",
         previous.restart.checkpoint.day.0,

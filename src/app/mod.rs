@@ -80,8 +80,8 @@ pub struct Inputs {
 }
 
 impl Inputs {
-    /// The days a run's `apertures.csv` holds besides its weekly rows: the
-    /// planned grouting dates and the snapshot dates.
+    /// The days a run's or a plan's `apertures.csv` holds besides its
+    /// weekly rows: the planned grouting dates and the snapshot dates.
     pub fn aperture_days(&self) -> std::collections::BTreeSet<Day> {
         let epoch = self.scene.epoch;
         let grouting = self.schedules.grouting.iter().map(|g| g.planned);

@@ -95,7 +95,7 @@ pub fn plan(
             damaged: Vec::new(),
         }
     } else {
-        restart::find(dest, scene, &inputs.schedules, end)
+        restart::find(dest, scene, &inputs.schedules, Some(end))
     };
     let previous = found.previous;
     let prev_dir = previous.as_ref().map(|p| p.dir.clone());
@@ -151,13 +151,8 @@ fn write_folder(
     }
     if !h.joint_records.columns.is_empty() {
         let p = dir.join("apertures.csv");
-        let extra = inputs
-            .schedules
-            .grouting
-            .iter()
-            .map(|g| epoch.day(g.planned))
-            .collect();
-        output::apertures::write(&p, epoch, &h.joint_records, &extra).map_err(io_err(&p))?;
+        output::apertures::write(&p, epoch, &h.joint_records, &inputs.aperture_days())
+            .map_err(io_err(&p))?;
     }
     if let Some(s) = &out_plan.remedied {
         let p = dir.join(REMEDIED_DIR);

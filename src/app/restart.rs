@@ -92,8 +92,9 @@ pub struct Found {
 /// A damaged checkpoint (truncated, or holding a non-finite value) is passed
 /// over for the one before it; a damaged history means starting from
 /// scratch. Either is reported in [`Found::damaged`], never an error: the
-/// plan can always be made without the folder's restart data.
-pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Day) -> Found {
+/// plan can always be made without the folder's restart data. The restart
+/// is not later than `end_day` (None: any day).
+pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Option<Day>) -> Found {
     let mut found = Found {
         previous: None,
         damaged: Vec::new(),
@@ -107,11 +108,15 @@ pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Day) 
         return found;
     };
     let first = first_change(&old, schedules);
-    let limit = first.map_or(end_day, |d| scene.epoch.day(d).min(end_day));
+    let first_day = first.map(|d| scene.epoch.day(d));
+    let limit = match (first_day, end_day) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
     let mut usable: Vec<(Day, PathBuf)> = list(&dir)
         .unwrap_or_default()
         .into_iter()
-        .filter(|&(d, _)| d <= limit)
+        .filter(|&(d, _)| limit.is_none_or(|l| d <= l))
         .collect();
     usable.sort_by_key(|u| u.0);
     let history: History = match read_file(&dir.join(HISTORY)) {

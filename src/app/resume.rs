@@ -40,9 +40,11 @@ use chrono::NaiveDate;
 use super::restart::{self, RESTART_DIR};
 use super::{io_err, AppError};
 use crate::planner::plan::Restart;
+use crate::scene::Scene;
 use crate::schedule::{Schedules, Warning};
 use crate::sim::checkpoint::{read_file, write_file};
 use crate::sim::{Checkpoint, Simulation};
+use crate::vocab::Day;
 
 /// Least wall time between two kept restart points [s]: a Xiaowan-scale
 /// checkpoint and history are a few hundred MB, written in a second or two.
@@ -77,6 +79,13 @@ pub struct Opened {
     /// what was removed or passed over, one line each
     pub notes: Vec<String>,
     pub damaged: Vec<Warning>,
+}
+
+/// The restart point of the interrupted run into `dest` that `scene` and
+/// `schedules` can continue from, not later than `end` (None: any day),
+/// and the damaged files passed over: [`restart::find`] in [`dir_of`].
+pub fn find(dest: &Path, scene: &Scene, schedules: &Schedules, end: Option<Day>) -> restart::Found {
+    restart::find(&dir_of(dest), scene, schedules, end)
 }
 
 /// The restart folder of the run folder `dest`.
@@ -116,7 +125,7 @@ impl Resume {
         let found = if from_scratch {
             None
         } else {
-            let f = restart::find(&dir, sim.scene, schedules, sim.end_day());
+            let f = find(dest, sim.scene, schedules, Some(sim.end_day()));
             opened.damaged = f.damaged;
             f.previous
         };

@@ -314,7 +314,7 @@ impl Timed<'_> {
         run: &Path,
     ) -> Result<Day, StudyError> {
         let dir = app::resume::dir_of(run);
-        let found = app::restart::find(&dir, self.scene, schedules, sim.end_day());
+        let found = app::resume::find(run, self.scene, schedules, Some(sim.end_day()));
         for w in &found.damaged {
             println!("{:<22} warning: {w}", "");
         }

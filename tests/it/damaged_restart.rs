@@ -52,7 +52,7 @@ fn truncate(path: &Path) {
 }
 
 fn find(dir: &TempDir, inputs: &Inputs) -> restart::Found {
-    restart::find(dir.path(), &inputs.scene, &inputs.schedules, END)
+    restart::find(dir.path(), &inputs.scene, &inputs.schedules, Some(END))
 }
 
 fn messages(found: &restart::Found) -> Vec<String> {

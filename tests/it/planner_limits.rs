@@ -49,7 +49,7 @@ fn plan_with(change: impl Fn(&mut PlannerSettings)) -> (Plan, String) {
     change(&mut scene.planner);
     scene.planner.validate().unwrap();
     let end = options().end_day(scene.epoch, &inputs.schedules);
-    let found = app::restart::find(&opened.dir, &scene, &inputs.schedules, end);
+    let found = app::restart::find(&opened.dir, &scene, &inputs.schedules, Some(end));
     let restart = found.previous.expect("the shared plan's restart").restart;
     let out = planner::plan(
         &scene,
