@@ -28,7 +28,12 @@ fn main() -> anyhow::Result<()> {
         .unwrap_or("models/demo_arch.toml".into());
     let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
     let mesh = &inputs.mesh;
-    let rock_e = inputs.scene.rock.as_ref().and_then(|r| r.modulus_pa).unwrap_or(2e10);
+    let rock_e = inputs
+        .scene
+        .rock
+        .as_ref()
+        .and_then(|r| r.modulus_pa)
+        .unwrap_or(2e10);
     let n = 3 * mesh.nodes.len();
     let local: Vec<[u32; 24]> = mesh.elements.iter().map(elasticity::element_dofs).collect();
     let pattern = Arc::new(Pattern::new(n, &local));
@@ -67,7 +72,10 @@ fn main() -> anyhow::Result<()> {
                 Part::Concrete { .. } => 2.5e10,
             };
             let g = elasticity::gauss_points(&mesh.element_coords(e))?;
-            a.add_element(e, &elasticity::stiffness(&g, &elasticity::isotropic_d(modulus, 0.2)));
+            a.add_element(
+                e,
+                &elasticity::stiffness(&g, &elasticity::isotropic_d(modulus, 0.2)),
+            );
         }
         let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
         let fixed: Vec<bool> = (0..n).map(|i| mesh.nodes[i / 3][2] < zmin + 1e-6).collect();
@@ -111,7 +119,8 @@ fn factorize<T: faer::traits::RealField + Copy + Default>(
     a: SparseColMatRef<'_, u32, T>,
 ) -> anyhow::Result<(Vec<T>, f64)> {
     let par = Par::rayon(0);
-    let mut mem = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()))?;
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default()))?;
     let mut l = vec![T::default(); symbolic.len_val()];
     let mut best = f64::MAX;
     for _ in 0..2 {

@@ -294,15 +294,23 @@ pub(super) fn list(dir: &Path) -> Result<Vec<(Day, PathBuf)>, CheckpointError> {
 /// Writes what decides whether the restart folder `dir` (created) is
 /// usable: the schedules as run, then the fingerprint of the scene and
 /// program (last, so that a folder stopped on the way is never used).
+/// Replaces the folder's own, the fingerprint removed first: a folder
+/// stopped on the way is then never used with either schedules.
 pub(super) fn write_identity(
     dir: &Path,
     scene: &Scene,
     schedules: &Schedules,
 ) -> Result<(), CheckpointError> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
-    let inputs = dir.join(INPUTS);
-    schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
     let f = dir.join(FINGERPRINT);
+    if f.exists() {
+        std::fs::remove_file(&f).map_err(io_err(&f))?;
+    }
+    let inputs = dir.join(INPUTS);
+    if inputs.exists() {
+        std::fs::remove_dir_all(&inputs).map_err(io_err(&inputs))?;
+    }
+    schedule::write_dir(schedules, &inputs).map_err(io_err(&inputs))?;
     std::fs::write(&f, fingerprint(scene)).map_err(io_err(&f))
 }
 

@@ -58,8 +58,14 @@ pub struct Resume {
     dir: PathBuf,
     /// when the last restart point was kept (None: none yet)
     saved: Option<Instant>,
-    /// the fingerprint and the schedules are in place
+    /// the folder and its `fields/` exist
     started: bool,
+    /// the fingerprint and this run's schedules are in place. Not so in a
+    /// folder continued with schedules that differ after its restart
+    /// point: its next restart point comes from this run's schedules,
+    /// which must replace the folder's before it is kept (else a run with
+    /// the old schedules would continue from it)
+    identity: bool,
     /// the snapshots already linked into `fields/`
     linked: usize,
 }
@@ -113,6 +119,7 @@ impl Resume {
                 dir: dir.clone(),
                 saved: None,
                 started: false,
+                identity: false,
                 linked: 0,
             },
             resumed: None,
@@ -139,6 +146,7 @@ impl Resume {
                     restart: p.restart,
                 });
                 opened.resume.started = true;
+                opened.resume.identity = p.first_change.is_none();
             }
             _ => {
                 std::fs::remove_dir_all(&dir).map_err(io_err(&dir))?;
@@ -188,8 +196,11 @@ impl Resume {
         if !self.started {
             // `open` removed any folder another run left here
             std::fs::create_dir_all(self.dir.join(FIELDS)).map_err(io_err(&self.dir))?;
-            restart::write_identity(&dir, sim.scene, schedules)?;
             self.started = true;
+        }
+        if !self.identity {
+            restart::write_identity(&dir, sim.scene, schedules)?;
+            self.identity = true;
         }
         for (_, name) in &written[self.linked.min(written.len())..] {
             link_or_copy(&fields.join(name), &self.dir.join(FIELDS).join(name))?;

@@ -401,6 +401,18 @@ fn reopening_reads_the_csv(out: &Path, rows: &[Vec<&str>]) {
 /// Starts `groutready run SCENE --out OUT` and kills it (SIGKILL: no
 /// clean-up runs) once it has kept its first restart point.
 fn killed_after_first_restart_point(scene: &Path, out: &Path) {
+    killed_after_restart_point(scene, out, &[], None);
+}
+
+/// `groutready run SCENE --out OUT` (extra arguments `args`) killed once it
+/// has kept a restart point other than the checkpoint file `other`;
+/// returns the kept checkpoint's file name.
+fn killed_after_restart_point(
+    scene: &Path,
+    out: &Path,
+    args: &[&std::ffi::OsStr],
+    other: Option<&str>,
+) -> String {
     let name = out.file_name().unwrap().to_string_lossy().into_owned();
     let restart = out
         .with_file_name(format!(".{name}.resume"))
@@ -410,6 +422,7 @@ fn killed_after_first_restart_point(scene: &Path, out: &Path) {
         .arg(scene)
         .arg("--out")
         .arg(out)
+        .args(args)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
@@ -417,25 +430,69 @@ fn killed_after_first_restart_point(scene: &Path, out: &Path) {
     // a whole checkpoint: `ck-DDDDD.tmp` is one being written, which a
     // kill leaves unread (the run then starts from day 0)
     let kept = || {
-        std::fs::read_dir(&restart).is_ok_and(|rd| {
-            rd.flatten().any(|e| {
-                let name = e.file_name().to_string_lossy().into_owned();
-                name.starts_with("ck-") && name.ends_with(".bin")
-            })
+        std::fs::read_dir(&restart).ok().and_then(|rd| {
+            rd.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .find(|n| n.starts_with("ck-") && n.ends_with(".bin") && Some(n.as_str()) != other)
         })
     };
     let start = std::time::Instant::now();
-    while !kept() {
+    let kept = loop {
+        if let Some(ck) = kept() {
+            break ck;
+        }
         assert!(
             child.try_wait().unwrap().is_none(),
             "the run ended before keeping a restart point"
         );
         assert!(start.elapsed().as_secs() < 120, "no restart point kept");
         std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    };
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.exists(), "a killed run wrote its run folder");
+    kept
+}
+
+/// A run continued with schedules that differ after its restart point
+/// keeps its next restart point with those schedules, so a run with the
+/// old ones does not continue from states it never had (the folder used
+/// to keep the schedules of the run that started it).
+#[test]
+fn a_run_continued_with_changed_schedules_keeps_them_with_its_restart_point() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = small_dam_restarting_at_day_120(tmp.path());
+    let run = tmp.path().join("runs").join("changed");
+    let day = |ck: &str| -> i64 { ck[3..8].parse().unwrap() };
+    let first = killed_after_restart_point(&scene, &run, &[], None);
+    assert!(day(&first) < 162, "{first}");
+    // a lift of 11 June 2024 (day 162) poured a degree warmer
+    let changed = tmp.path().join("changed_schedules");
+    copy_dir(&repo("schedules/small_dam"), &changed);
+    let pours = changed.join("pours.csv");
+    let text = std::fs::read_to_string(&pours).unwrap();
+    assert!(text.contains("3,12,2024-06-11,12.6\n"));
+    std::fs::write(
+        &pours,
+        text.replace("3,12,2024-06-11,12.6\n", "3,12,2024-06-11,13.6\n"),
+    )
+    .unwrap();
+    let args = [std::ffi::OsStr::new("--schedules"), changed.as_os_str()];
+    let second = killed_after_restart_point(&scene, &run, &args, Some(&first));
+    assert!(day(&second) > 162, "{second}");
+    let kept = groutready::schedule::load(&tmp.path().join("runs/.changed.resume/restart/inputs"))
+        .unwrap();
+    let edited = groutready::schedule::load(&changed).unwrap();
+    assert_eq!(
+        groutready::planner::edit::first_change(&kept, &edited),
+        None
+    );
+    let err = run_again(&scene, &run, &[]);
+    assert!(!err.contains("continuing"), "{err}");
+    assert!(
+        err.contains("not one these inputs and this program can continue from"),
+        "{err}"
+    );
 }
 
 /// `groutready run SCENE` again into OUT (extra arguments `args`); returns
