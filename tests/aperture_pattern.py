@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Checks the joint-aperture history of a demo run against the pattern of the
-seed paper's Figs. 4-6 (run by .ci/run on the demo's apertures.csv):
+"""Checks the joint-aperture history of a run (its apertures.csv) against the
+pattern of the seed paper's Figs. 4-6 (the demo's whole run is left out of
+.ci/run's budget; see its comment):
 
 - before grouting, a zone's centre aperture is largest late in its ungrouted
   life (second-stage cooling), not while the concrete is young and hot;
@@ -14,6 +15,9 @@ it was grouted and in which month, for the points that re-open and for
 those that hold. A layer set at a face warmed by summer air goes into
 tension as the face cools in winter (the seasonal face cracking that
 real projects avoid by grouting in the cool season or insulating faces).
+And where along its arch each re-opened centre lies: how many joints from
+the nearer end of its level (the abutment), since a fixed arch's bending
+under a seasonal change of temperature is largest there.
 
 Prints the figures; exits 1 with the reason when the pattern is not met.
 """
@@ -106,7 +110,26 @@ def reopening_figures():
                   + " ".join(f"{months[m]} {by_month[m]}" for m in range(12) if by_month[m]))
 
 
+def reopened_centres_along_the_arch():
+    """Each re-opened centre's place in its level's arch: the joints
+    counted from the nearer abutment (1: the last joint before the rock)."""
+    joints = collections.defaultdict(set)
+    for (joint, zone, point) in rows:
+        if point == "center":
+            joints[zone].add(joint)
+    places = collections.Counter()
+    for (joint, zone, point), hist in rows.items():
+        if point == "center" and any(h[2] == "reopened" for h in hist):
+            level = sorted(joints[zone])
+            i = level.index(joint)
+            places[min(i, len(level) - 1 - i) + 1] += 1
+    if places:
+        print("re-opened centres by joints from the nearer abutment of their level: "
+              + ", ".join(f"{k}: {places[k]}" for k in sorted(places)))
+
+
 reopening_figures()
+reopened_centres_along_the_arch()
 for f in failures:
     print("FAIL:", f)
 sys.exit(1 if failures else 0)
