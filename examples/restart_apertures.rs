@@ -3,19 +3,22 @@
 //! a long run's joint history so far, for `tests/aperture_pattern.py`,
 //! without waiting for its end.
 //!
-//!     cargo run --release --example restart_apertures SCENE RUN OUT.csv
+//!     cargo run --release --example restart_apertures SCENE RUN OUT.csv [SCHEDULES]
 //!
 //! RUN is the `--out` folder of the interrupted `groutready run` (its
 //! restart point is `.RUN.resume` beside it); the scene and its schedules
-//! must be the ones it ran.
+//! (the scene's own, or the folder SCHEDULES, as `run --schedules`) must
+//! be the ones it ran.
 use std::path::Path;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let [_, scene, run, out] = args.as_slice() else {
-        anyhow::bail!("usage: restart_apertures SCENE RUN OUT.csv");
+    let (scene, run, out, schedules) = match args.as_slice() {
+        [_, scene, run, out] => (scene, run, out, None),
+        [_, scene, run, out, s] => (scene, run, out, Some(Path::new(s))),
+        _ => anyhow::bail!("usage: restart_apertures SCENE RUN OUT.csv [SCHEDULES]"),
     };
-    let inputs = groutready::app::load_inputs(Path::new(scene), None)?;
+    let inputs = groutready::app::load_inputs(Path::new(scene), schedules)?;
     let run = Path::new(run);
     let found = groutready::app::resume::find(run, &inputs.scene, &inputs.schedules, None);
     for w in &found.damaged {
