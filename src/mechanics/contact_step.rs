@@ -658,9 +658,12 @@ struct PassOutcome {
 /// weight, water and cooling at once (`hard_cases`) 54 passes, tension 0
 /// against 1.5 MPa. Past half the step's passes the step starts again
 /// under the flip limit's rule alone: on the Xiaowan-like complete dam
-/// under its weight (15,729 points) each round of normal switches waited
-/// 15–55 passes for the friction to settle, the step had not ended, and
-/// the restart gave the old answer in 235 passes against 85.
+/// under its weight (15,729 points) each round of normal switches waits
+/// 10–50 passes for the friction to settle; with 300 passes the restart
+/// at pass 150 gave the old answer (6.8 MPa kept) in 235, and with
+/// 600 (`study::COMPLETE_STEP_MAX_PASSES`) the rounds end at pass 240
+/// (wrong points 6,461, 2,560, 1,030, 502, 318, 186, 97, 57, 29, 6, 0)
+/// and the step at pass 259 with no tension kept (29 Nov 2026).
 #[derive(Debug, Clone, Copy)]
 struct BlockPivoting {
     /// least count of wrong normal states after a pass that switched

@@ -1757,7 +1757,7 @@ fn the_complete_dam_with_friction_loaded_at_once() {
     let t = std::time::Instant::now();
     let mu = DEMO_FRICTION;
     // the cap `study perf` gives its complete-dam step (a scene's is 60)
-    let (once, mesh) = demo_dam_with_friction_at_once(300);
+    let (once, mesh) = demo_dam_with_friction_at_once(groutready::study::COMPLETE_STEP_MAX_PASSES);
     let h = health(&once, &mesh, mu, 0.0, "at once");
     let passes = once.stats.contact_iterations;
     eprintln!(
