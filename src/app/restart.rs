@@ -108,11 +108,11 @@ pub fn find(run_dir: &Path, scene: &Scene, schedules: &Schedules, end_day: Optio
         return found;
     };
     let first = first_change(&old, schedules);
-    let first_day = first.map(|d| scene.epoch.day(d));
-    let limit = match (first_day, end_day) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
-    };
+    let limit = first
+        .map(|d| scene.epoch.day(d))
+        .into_iter()
+        .chain(end_day)
+        .min();
     let mut usable: Vec<(Day, PathBuf)> = list(&dir)
         .unwrap_or_default()
         .into_iter()
