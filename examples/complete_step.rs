@@ -15,5 +15,19 @@ fn main() -> anyhow::Result<()> {
         "{} dofs, {} pairs: step {:.2} s, {} numeric factorisations, {} passes, largest tension kept closed {:.3e} Pa",
         s.max_dofs, cost.pairs, cost.step_s, s.numeric, s.contact_iterations, s.kept_closed_tension
     );
+    let c = &s.capacitance;
+    println!(
+        "factorisations {:.1} s; corrected solves {} ({:.1} s): {} refinements, {} columns ({:.1} s), \
+         {} capacitance LUs ({:.1} s, largest {} rows)",
+        s.seconds_numeric,
+        c.solves,
+        c.seconds,
+        c.refinements,
+        c.columns,
+        c.column_seconds,
+        c.s_factorisations,
+        c.s_seconds,
+        c.max_rank
+    );
     Ok(())
 }

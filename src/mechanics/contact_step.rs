@@ -59,9 +59,13 @@
 //!   normal problem), so the iteration ends without leaving a point closed
 //!   in tension or open with an overlap. With friction, once a point
 //!   cycles, the step's normal states switch by block pivoting
-//!   ([`BlockPivoting`]): only after the friction states and forces have
-//!   settled on the current normal states, every wrong point at once while
-//!   that lowers the count of wrong points, else the least-index one. Past
+//!   ([`BlockPivoting`]): only after the friction forces have settled on
+//!   the current normal states, every wrong point at once while that
+//!   lowers the count of wrong points, else the least-index one, and the
+//!   slipping points then found moving with their force stick in the same
+//!   pass. The step ends once the slip forces hold to the force
+//!   tolerance, or to that fraction of the largest joint force where that
+//!   is less ([`ActiveSet::friction_tolerance`]). Past
 //!   its budget of single switches a cycling point may only close or slip,
 //!   and the tension it may keep is reported.
 //! - `condensed_qp`: the Delassus operator W = Eᵀ K̃⁻¹ E of the contact
@@ -99,6 +103,15 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 /// the same 85 passes and states; the demo's whole construction is the
 /// same to the byte.
 const PASS_REFINE_TO: f64 = 1e-9;
+/// Slip-force residual, in the step's friction tolerances
+/// (`ActiveSet::friction_tolerance`), below which a pass is refined to
+/// [`REFINE_TO`] rather than [`PASS_REFINE_TO`]: the reactions of a solve
+/// refined to 1e-9 of the load's 2-norm carry errors of several
+/// tolerances (1e-9 of the largest force), so the slip forces' fixed
+/// point could not settle below them. On the Xiaowan-like complete dam
+/// (29 Nov 2026) its residual stalled at 10–20 tolerances for 30 passes
+/// without; such a pass also needs no second solve to check its states.
+const FINE_PASS_FACTOR: f64 = 1e3;
 /// Open ↔ closed and slip → stick switches of one point within a step after
 /// which the point is cycling: its normal state switches only as the single
 /// least-index switch of a pass ([`ActiveSet::pivot`]). A point whose gap
@@ -127,16 +140,16 @@ const ANDERSON_DEPTH: usize = 8;
 /// 1e3: each of its four Anderson rounds had settled its set 4–5 passes
 /// before 1e3 was reached.
 const SETTLED_FACTOR: f64 = 1e5;
-/// [`BlockPivoting`] switches normal states once the slip forces'
-/// residual is below this many force tolerances (1e-2 of the step's
-/// largest force at the default 1e-9) with no slipping point moving with
-/// its force, and sticks such points at the same residual: the normal
-/// reactions that decide them are then right but near zero, and a point
-/// decided wrongly costs passes, never the answer. The demo's complete dam
-/// under its weight at once (28 Nov 2026): 88 passes, against 94 with the
-/// reversed points stuck at [`SETTLED_FACTOR`], 106 with 1e6 and 148 with
-/// [`SETTLED_FACTOR`] for both; the same 10 factorisations and no tension
-/// kept.
+/// [`BlockPivoting`] switches normal states, and sticks the slipping
+/// points moving with their force, in the pass after the slip forces'
+/// residual fell below this many force tolerances (1e-2 of the step's
+/// largest force at the default 1e-9): the normal reactions that decide
+/// them are then right but near zero, and a point decided wrongly costs
+/// passes, never the answer. The demo's complete dam under its weight at
+/// once (29 Nov 2026): 66 passes, against 77 with 1e6, 54 with 1e8, 50
+/// with 3e8 and 329 (6.4 MPa kept) with 1e9; on the Xiaowan-like complete
+/// dam 1e8 took 123 passes against 149 but the same 205 s, so the factor
+/// keeps its margin from the cliff.
 const NORMAL_SETTLED_FACTOR: f64 = 1e7;
 /// Cost of one flop of a capacitance column's reach solve
 /// ([`crate::fem::CholeskySolver::reach_cost`]) relative to one flop of
@@ -538,7 +551,7 @@ fn active_set(
             it = it.restart_without_pivoting(sys, live, s, trial);
         }
         let pass_refine = Refine {
-            to: PASS_REFINE_TO,
+            to: it.pass_refine_to(),
             from: None,
         };
         let (mut x, mut loose) = it.solve_guess(sys, live, trial, pass_refine)?;
@@ -604,6 +617,8 @@ struct ActiveSet {
     may_pivot: bool,
     /// force below which a reaction counts as zero [N]
     tol_f: f64,
+    /// the step's force tolerance (relative)
+    force_tolerance: f64,
     /// gap below which an open point closes [m]
     tol_g: f64,
     frictionless: bool,
@@ -619,6 +634,10 @@ struct ActiveSet {
     m: SparseSym,
     /// correct a changed set of constrained rows instead of refactorising
     capacitance: bool,
+    /// the slip forces' fixed-point residual after the last pass, in
+    /// [`ActiveSet::friction_tolerance`]s (infinite after a change of
+    /// states)
+    slip_residual: f64,
 }
 
 /// What correcting the states after a pass found.
@@ -637,8 +656,8 @@ struct PassOutcome {
 
 /// How a frictional step whose points cycle switches its normal states:
 /// block principal pivoting with Murty's least-index safeguard (Júdice and
-/// Pires, 1994), on normal states decided only once the friction has
-/// settled on them.
+/// Pires, 1994), on normal states decided only once the friction forces
+/// have settled on them.
 ///
 /// Opening a point releases its shear as well as its pressure, and
 /// closing one as a stick trial adds a shear constraint, so with friction
@@ -647,23 +666,27 @@ struct PassOutcome {
 /// the demo's complete dam loaded at once opened and re-closed hundreds of
 /// points per pass and, at the flip limit, kept 500 of its 1,552 points
 /// closed in tension up to 7.7 MPa. Here a pass switches no normal state
-/// until the slip forces have settled ([`NORMAL_SETTLED_FACTOR`]) with no
-/// slipping point moving with its force (`hold`); then every wrong point switches
-/// while the count of wrong points reaches a new least within
-/// [`BLOCK_PASSES`] passes, else only the one of least index (`single`),
-/// which ends for a P-matrix (the frictionless normal problem; with
-/// friction it is a safeguard, not a proof). Measured on the demo's
-/// complete dam (28 Nov 2026): self-weight at once 88 passes and 10
-/// factorisations against 29 and 12, no tension kept against 7.7 MPa;
-/// weight, water and cooling at once (`hard_cases`) 54 passes, tension 0
-/// against 1.5 MPa. Past half the step's passes the step starts again
-/// under the flip limit's rule alone: on the Xiaowan-like complete dam
-/// under its weight (15,729 points) each round of normal switches waits
-/// 10–50 passes for the friction to settle; with 300 passes the restart
-/// at pass 150 gave the old answer (6.8 MPa kept) in 235, and with
-/// 600 (`study::COMPLETE_STEP_MAX_PASSES`) the rounds end at pass 240
-/// (wrong points 6,461, 2,560, 1,030, 502, 318, 186, 97, 57, 29, 6, 0)
-/// and the step at pass 259 with no tension kept (29 Nov 2026).
+/// until the slip forces have settled ([`NORMAL_SETTLED_FACTOR`];
+/// `hold`); then every wrong point switches while the count of wrong
+/// points reaches a new least within [`BLOCK_PASSES`] passes, else only
+/// the one of least index (`single`), which ends for a P-matrix (the
+/// frictionless normal problem; with friction it is a safeguard, not a
+/// proof). The slipping points found moving with their friction force
+/// stick in that same pass: sticking them in settling rounds of their own
+/// (before 29 Nov 2026) restarted the slip forces' mixing for each batch
+/// while the count of wrong normal states did not move (on the
+/// Xiaowan-like complete dam, 2,560 from pass 44 to 85 while 38, 5, 3, 1
+/// and 1 points stuck). Measured on the demo's complete dam (29 Nov
+/// 2026): self-weight at once 66 passes and 10 factorisations (88 with
+/// the rounds of their own, 29 and 12 with the flip limit alone), no
+/// tension kept against 7.7 MPa; weight, water and cooling at once
+/// (`hard_cases`) 37 passes (54), tension 0 against 1.5 MPa. Past half
+/// the step's passes the step starts again under the flip limit's rule
+/// alone. On the Xiaowan-like complete dam under its weight (15,729
+/// points) the rounds take 7–12 passes each (wrong points 6,602, 2,678,
+/// 1,042, 484, 324, 183, 98, 85, 41, 24, 10, 1, 1, 0) and the step ends
+/// at pass 149 with no tension kept, where the rounds of their own took
+/// 259 (`study::COMPLETE_STEP_MAX_PASSES` allows 600).
 #[derive(Debug, Clone, Copy)]
 struct BlockPivoting {
     /// least count of wrong normal states after a pass that switched
@@ -758,6 +781,7 @@ impl ActiveSet {
                 0
             },
             tol_f: s.force_tolerance * f_scale,
+            force_tolerance: s.force_tolerance,
             tol_g: s.gap_tolerance,
             frictionless: s.mu_static == 0.0,
             anderson: Anderson::new(ANDERSON_DEPTH),
@@ -766,6 +790,7 @@ impl ActiveSet {
             a_cur: SparseSym::new(sys.a.pattern().clone()),
             m: SparseSym::new(sys.a.pattern().clone()),
             capacitance: s.capacitance,
+            slip_residual: f64::INFINITY,
         };
         if let Some(p) = prepared {
             it.factored = Some((p.springs, Capacitance::with_diagonal(p.fixed, p.base_diag)));
@@ -869,6 +894,16 @@ impl ActiveSet {
             corrected.x,
         )?;
         Ok((x, loose))
+    }
+
+    /// The residual a pass is refined to: the answer's once the slip
+    /// forces are near settling ([`FINE_PASS_FACTOR`]).
+    fn pass_refine_to(&self) -> f64 {
+        if self.slip_residual <= FINE_PASS_FACTOR {
+            REFINE_TO
+        } else {
+            PASS_REFINE_TO
+        }
     }
 
     /// Makes `a_cur` the matrix of a pass holding the rows `fixed` with the
@@ -1290,7 +1325,18 @@ impl ActiveSet {
         let slipping: Vec<usize> = (0..live.pairs.len())
             .filter(|&q| trial.work[live.pairs[q].point as usize].state == PointState::Slip)
             .collect();
+        // BlockPivoting: the reversed points stick with the normal
+        // switches of the pass after the friction settled, not in a
+        // settling round of their own
+        let holding = self.pivoting.is_some_and(|b| b.hold);
+        let switching = self.pivoting.is_some_and(|b| !b.hold);
         if changes > 0 {
+            let changes = if switching {
+                changes + self.stick(live, trial, &reversed)
+            } else {
+                changes
+            };
+            self.slip_residual = f64::INFINITY;
             // New states: restart the slip-force iteration from their forces.
             // (Keeping Anderson's history through changes of a few points
             // was tried on the complete Xiaowan-like dam: its secants mix
@@ -1310,20 +1356,20 @@ impl ActiveSet {
                 ])
             })
             .fold(0.0, f64::max);
-        let settled = residual <= self.tol_f * NORMAL_SETTLED_FACTOR && reversed.is_empty();
+        let end = self.friction_tolerance(live, trial);
+        self.slip_residual = residual / end;
+        let settled = residual <= self.tol_f * NORMAL_SETTLED_FACTOR;
         if let (Some(b), true) = (self.pivoting.as_mut(), settled) {
             b.settled = true;
         }
-        if residual <= self.tol_f && reversed.is_empty() {
+        if residual <= end && reversed.is_empty() {
             // the friction holds; the held normal states switch next pass
             (held > 0).then_some(held)
-        } else if !reversed.is_empty() && residual <= self.tol_f * self.settled_factor() {
-            for &q in &reversed {
-                trial.work[live.pairs[q].point as usize].state = PointState::Stick;
-                self.flip(q);
-            }
+        } else if !reversed.is_empty() && !holding && residual <= self.tol_f * self.settled_factor()
+        {
             self.anderson.clear();
-            Some(reversed.len())
+            self.slip_residual = f64::INFINITY;
+            Some(self.stick(live, trial, &reversed))
         } else {
             // The slip forces are a fixed point of (forces → solve →
             // μ_k·r_n), affine for fixed directions. Anderson mixing
@@ -1337,6 +1383,33 @@ impl ActiveSet {
             }
             Some(changes)
         }
+    }
+
+    /// The residual the slip forces settle to before the step may end:
+    /// the force tolerance, or that fraction of the largest joint force
+    /// where that is less. A step whose loads dwarf its joint forces (the
+    /// demo's complete dam cooled 10 °C at once: 3.9 N against 5.7e7 N,
+    /// 6.8e-8 of it) would otherwise end with the friction law held
+    /// more loosely than the tolerance asks.
+    fn friction_tolerance(&self, live: &LiveSystem, trial: &Trial) -> f64 {
+        let largest = live
+            .pairs
+            .iter()
+            .flat_map(|p| trial.work[p.point as usize].force)
+            .fold(0.0f64, |m, f| m.max(f.abs()));
+        self.tol_f
+            .min(self.force_tolerance * largest)
+            .max(f64::MIN_POSITIVE)
+    }
+
+    /// Sticks the slipping points found moving with their friction force;
+    /// returns how many.
+    fn stick(&mut self, live: &LiveSystem, trial: &mut Trial, reversed: &[usize]) -> usize {
+        for &q in reversed {
+            trial.work[live.pairs[q].point as usize].state = PointState::Stick;
+            self.flip(q);
+        }
+        reversed.len()
     }
 
     /// The largest tension left on a point the flip limit kept closed.

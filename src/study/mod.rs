@@ -582,11 +582,14 @@ fn all_lifts(mesh: &crate::mesh::Mesh) -> Vec<(u32, u32)> {
 /// Contact passes the complete-dam step may take (at least; a scene's own
 /// larger cap stands). Block pivoting has half of them before the step
 /// starts again under the flip limit's rule (`contact_step::BlockPivoting`).
-/// On the Xiaowan-like complete dam (29 Nov 2026) its rounds brought the
-/// points in a wrong normal state down from 6,461 through 2,560, 1,030,
-/// 502, 318, 186, 97, 57, 29 and 6 to none at pass 240, the answer at pass
-/// 259 with no tension kept, in 266.8 s; with 300 passes the restart at
-/// pass 150 (502 wrong) ended with 6.8 MPa kept in 235 passes and 332 s.
+/// On the Xiaowan-like complete dam (29 Nov 2026, afternoon) its rounds
+/// brought the points in a wrong normal state down from 6,461 through
+/// 2,560, 1,030, 502, 318, 186, 97, 57, 29 and 6 to none at pass 240, the
+/// answer at pass 259 with no tension kept, in 266.8 s; with 300 passes
+/// the restart at pass 150 (502 wrong) ended with 6.8 MPa kept in 235
+/// passes and 332 s. With the rounds shortened (that evening) the step
+/// ends at pass 149: 300 would now do, with no margin; 600 costs nothing
+/// where it is not needed.
 pub const COMPLETE_STEP_MAX_PASSES: usize = 600;
 
 /// Cost of one mechanical step of the complete dam.
@@ -615,7 +618,7 @@ pub fn full_dam_mechanics_step_cost(
     let mut settings =
         crate::mechanics::MechanicsSettings::from_scene(scene).map_err(MechError::from)?;
     // Every joint closing at once is the hard case, not a construction
-    // step: the Xiaowan-like arch needs 259 passes (measured), more than a
+    // step: the Xiaowan-like arch needs 149 passes (measured), more than a
     // scene's default cap of 60.
     settings.joint.max_iterations = settings.joint.max_iterations.max(COMPLETE_STEP_MAX_PASSES);
     let mut m = crate::mechanics::MechanicsModel::new(
