@@ -375,13 +375,16 @@ struct Trial {
 /// Largest force of the step: right-hand side and committed contact forces.
 fn force_scale(b: &[f64], live: &LiveSystem, states: &[JointPointState]) -> f64 {
     let fb = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let fr = live
-        .pairs
+    fb.max(largest_joint_force(live, states))
+        .max(f64::MIN_POSITIVE)
+}
+
+/// Largest component of the live pairs' forces in `states`.
+fn largest_joint_force(live: &LiveSystem, states: &[JointPointState]) -> f64 {
+    live.pairs
         .iter()
-        .map(|p| &states[p.point as usize].force)
-        .flat_map(|f| f.iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    fb.max(fr).max(f64::MIN_POSITIVE)
+        .flat_map(|p| states[p.point as usize].force)
+        .fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
 /// K̃ plus the springs of the intact grout layers.
@@ -1392,13 +1395,8 @@ impl ActiveSet {
     /// 6.8e-8 of it) would otherwise end with the friction law held
     /// more loosely than the tolerance asks.
     fn friction_tolerance(&self, live: &LiveSystem, trial: &Trial) -> f64 {
-        let largest = live
-            .pairs
-            .iter()
-            .flat_map(|p| trial.work[p.point as usize].force)
-            .fold(0.0f64, |m, f| m.max(f.abs()));
         self.tol_f
-            .min(self.force_tolerance * largest)
+            .min(self.force_tolerance * largest_joint_force(live, &trial.work))
             .max(f64::MIN_POSITIVE)
     }
 
