@@ -18,7 +18,7 @@ fn main() -> anyhow::Result<()> {
     let c = &s.capacitance;
     println!(
         "factorisations {:.1} s; corrected solves {} ({:.1} s): {} refinements, {} columns ({:.1} s), \
-         {} capacitance LUs ({:.1} s, largest {} rows)",
+         {} capacitance LUs ({:.1} s, products {:.1} s, {:.1} Gflop, largest {} rows)",
         s.seconds_numeric,
         c.solves,
         c.seconds,
@@ -27,6 +27,8 @@ fn main() -> anyhow::Result<()> {
         c.column_seconds,
         c.s_factorisations,
         c.s_seconds,
+        c.product_seconds,
+        c.product_flops / 1e9,
         c.max_rank
     );
     Ok(())

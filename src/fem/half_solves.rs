@@ -38,9 +38,10 @@
 use std::ops::Range;
 
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
-use faer::{Accum, MatMut, MatRef, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// No parent: a root of the elimination tree.
 const ROOT: u32 = u32::MAX;
@@ -262,6 +263,107 @@ impl ReachColumn {
             }
         }
     }
+}
+
+/// Flops of one block's products above which [`gram`] runs them in
+/// parallel: the blocks near the root of the elimination tree (thousands
+/// of rows, every column), where the Xiaowan-like complete dam's products
+/// are.
+pub const GRAM_PAR_FLOPS: f64 = 1e7;
+
+/// The products of reach columns (of one factor) block by block: `g_new`
+/// = YₙᵀYₙ on and below its diagonal (entry (a, b), b ≤ a; zero above) and
+/// `g_old` = YₙᵀY_o, for the columns `new` and `old`; and the flops of
+/// their products. A block's products of more than [`GRAM_PAR_FLOPS`]
+/// run with `par`, the others on this thread.
+///
+/// Per block of L, the columns whose reach holds it are gathered into one
+/// dense panel Z (the block's rows × those columns) and its products are
+/// one matrix product, Z_nᵀZ_n (lower half) and Z_nᵀZ_o. Summed over the
+/// blocks that is every YᵢᵀYⱼ, the same flops as the products pair by
+/// pair, but in BLAS-3 kernels instead of a merge of both columns' spans
+/// for each pair (the capacitance matrices of the Xiaowan-like arch's late
+/// days: rank ~1,000, half a million pairs of columns of ~12,000 rows).
+pub fn gram(new: &[&ReachColumn], old: &[&ReachColumn], par: Par) -> (Mat<f64>, Mat<f64>, f64) {
+    let n_new = new.len();
+    let column = |c: usize| if c < n_new { new[c] } else { old[c - n_new] };
+    // (block's first row, column in new ++ old, offset of its values, width)
+    let mut at: Vec<(u32, u32, u32, u32)> = Vec::new();
+    for (c, col) in new.iter().chain(old).enumerate() {
+        let mut off = 0;
+        for &(start, len) in &col.spans {
+            at.push((start, c as u32, off, len));
+            off += len;
+        }
+    }
+    // spans are whole blocks: equal starts are the same block, and within
+    // one the new columns come first
+    at.sort_unstable();
+    let mut g_new = Mat::<f64>::zeros(n_new, n_new);
+    let mut g_old = Mat::<f64>::zeros(n_new, old.len());
+    let (mut panel, mut product) = (Vec::new(), Vec::new());
+    let mut flops = 0.0;
+    for group in at.chunk_by(|a, b| a.0 == b.0) {
+        let k_new = group.partition_point(|e| (e.1 as usize) < n_new);
+        if k_new == 0 {
+            continue;
+        }
+        let (g, w) = (group.len(), group[0].3 as usize);
+        let block_flops = w as f64 * k_new as f64 * (k_new + 1 + 2 * (g - k_new)) as f64;
+        flops += block_flops;
+        let par = if block_flops > GRAM_PAR_FLOPS {
+            par
+        } else {
+            Par::Seq
+        };
+        panel.clear();
+        for &(_, c, off, _) in group {
+            let off = off as usize;
+            panel.extend_from_slice(&column(c as usize).values[off..off + w]);
+        }
+        let z = MatRef::from_column_major_slice(&panel, w, g);
+        let (z_new, z_old) = z.split_at_col(k_new);
+        product.clear();
+        product.resize(k_new * g, 0.0);
+        let (p_new, p_old) = product.split_at_mut(k_new * k_new);
+        let mut p_new = MatMut::from_column_major_slice_mut(p_new, k_new, k_new);
+        triangular::matmul(
+            p_new.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            z_new.transpose(),
+            BlockStructure::Rectangular,
+            z_new,
+            BlockStructure::Rectangular,
+            1.0,
+            par,
+        );
+        for b in 0..k_new {
+            let cb = group[b].1 as usize;
+            for a in b..k_new {
+                g_new[(group[a].1 as usize, cb)] += p_new[(a, b)];
+            }
+        }
+        if g == k_new {
+            continue;
+        }
+        let mut p_old = MatMut::from_column_major_slice_mut(p_old, k_new, g - k_new);
+        matmul(
+            p_old.as_mut(),
+            Accum::Replace,
+            z_new.transpose(),
+            z_old,
+            1.0,
+            par,
+        );
+        for (b, e) in group[k_new..].iter().enumerate() {
+            let cb = e.1 as usize - n_new;
+            for a in 0..k_new {
+                g_old[(group[a].1 as usize, cb)] += p_old[(a, b)];
+            }
+        }
+    }
+    (g_new, g_old, flops)
 }
 
 /// xᵀy of two slices of one length, in eight interleaved partial sums: a

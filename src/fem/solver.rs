@@ -271,6 +271,11 @@ impl CholeskySolver {
         self.factorized
     }
 
+    /// The parallelism of its numeric factorisations.
+    pub fn parallelism(&self) -> Par {
+        self.par
+    }
+
     pub fn set_parallelism(&mut self, par: Par) -> Result<(), SolveError> {
         self.scratch = factor_scratch(&self.symbolic, self.permuted.is_some(), par)?;
         self.par = par;

@@ -550,7 +550,7 @@ fn active_set(
     let mut last_changes = 0;
     for pass in 1..=s.max_iterations {
         trial.out.iterations = pass;
-        if it.pivoting.is_some() && pass > s.max_iterations / 2 {
+        if it.pivoting.is_some_and(|b| b.last_wrong > 0) && pass > s.max_iterations / 2 {
             it = it.restart_without_pivoting(sys, live, s, trial);
         }
         let pass_refine = Refine {
@@ -694,6 +694,8 @@ struct PassOutcome {
 struct BlockPivoting {
     /// least count of wrong normal states after a pass that switched
     fewest_wrong: usize,
+    /// the count after the last pass that switched
+    last_wrong: usize,
     /// passes left that switch every wrong point without a new least
     block_passes_left: usize,
     /// this pass switches the wrong point of least index only
@@ -708,6 +710,7 @@ impl BlockPivoting {
     fn new() -> Self {
         BlockPivoting {
             fewest_wrong: usize::MAX,
+            last_wrong: usize::MAX,
             block_passes_left: BLOCK_PASSES,
             single: false,
             hold: true,
@@ -718,6 +721,7 @@ impl BlockPivoting {
     /// Every wrong point switches while the count falls to a new least
     /// within [`BLOCK_PASSES`] passes, else one.
     fn choose(&mut self, wrong: usize) {
+        self.last_wrong = wrong;
         if wrong < self.fewest_wrong {
             self.fewest_wrong = wrong;
             self.block_passes_left = BLOCK_PASSES;
@@ -804,7 +808,8 @@ impl ActiveSet {
 
     /// The step started again from its first guess under the flip limit's
     /// rule alone, keeping the factor: [`BlockPivoting`] has not ended in
-    /// half the passes. Continuing from where block pivoting left the
+    /// half the passes (normal states still wrong: a step whose rounds
+    /// have ended and whose slip forces are settling goes on). Continuing from where block pivoting left the
     /// states did not end either (the Xiaowan-like complete dam: not in
     /// the 150 passes left, where the rule from the start takes 85).
     fn restart_without_pivoting(

@@ -475,7 +475,7 @@ fn print_mechanics(m: &MechStats) {
         m.numeric_flops / 1e9
     );
     println!(
-        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined; {} forward halves on a reach), {} columns ({:.1} % of their live sets' rows, {:.2} s, {:.1} Gflop estimated), {} LU of S ({:.1} Gflop, {:.2} s with its assembly), largest rank {}, {:.2} s",
+        "{:<22} joint factorisations by reason: {} step, {} grout, {} contact change (correction off), {} past break-even; capacitance: {} solves ({} refined; {} forward halves on a reach), {} columns ({:.1} % of their live sets' rows, {:.2} s, {:.1} Gflop estimated), {} LU of S ({:.1} Gflop, {:.2} s with its assembly; its products {:.2} s, {:.1} Gflop), largest rank {}, {:.2} s",
         "",
         r.step,
         r.grout,
@@ -491,6 +491,8 @@ fn print_mechanics(m: &MechStats) {
         m.capacitance.s_factorisations,
         m.capacitance.s_flops / 1e9,
         m.capacitance.s_seconds,
+        m.capacitance.product_seconds,
+        m.capacitance.product_flops / 1e9,
         m.capacitance.max_rank,
         m.capacitance.seconds
     );

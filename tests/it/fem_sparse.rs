@@ -14,7 +14,7 @@ use faer::Mat;
 use groutready::fem::{
     capacity_consistent, capacity_lumped, conductivity, face_convection, hex8, nested_dissection,
     relative_residual, volume_load, Capacitance, CholeskySolver, Coupling, Ordering, Pattern,
-    PatternError, SolveError, SparseSym, NO_DOF,
+    PatternError, ReachColumn, SolveError, SparseSym, NO_DOF,
 };
 use nalgebra::{DMatrix, DVector, SMatrix};
 
@@ -865,6 +865,59 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
         }
         let s = solver.stats();
         assert_eq!(s.n_reach_columns, 12);
+    }
+}
+
+/// The products of reach columns computed block by block (`gram`, what
+/// the capacitance matrices use) equal the products pair by pair, on and
+/// below the diagonal of the new columns' block and against the old
+/// columns, and are zero above that diagonal; on a simplicial and a
+/// supernodal factor, with columns whose reaches overlap in part.
+#[test]
+fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
+    use groutready::fem::half_solves::gram;
+    for (size, ordering) in [([6, 5, 4], Ordering::Amd), ([18, 16, 14], Ordering::Metis)] {
+        let mut rng = Rng(43);
+        let g = grid(size, 1.0, 0.2, true, &mut rng);
+        let n = g.n_dofs();
+        let (a, _) = assemble_both(&g, 1.0, false);
+        let mut solver =
+            CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
+        solver.factorize(&a).unwrap();
+        let mut work = groutready::fem::ReachWork::default();
+        let mut columns: Vec<Vec<(usize, f64)>> = (0..23)
+            .map(|k| vec![((k * 7919) % n, rng.range(-2.0, 2.0))])
+            .collect();
+        let mut column = Vec::new();
+        a.column(n / 2, |i, v| column.push((i, v)));
+        columns.push(column);
+        let ys = solver.forward_reach_many(&columns, &mut work).unwrap();
+        let (new, old) = ys.split_at(9);
+        fn refs(s: &[ReachColumn]) -> Vec<&ReachColumn> {
+            s.iter().collect()
+        }
+        let (g_new, g_old, _) = gram(&refs(new), &refs(old), faer::Par::Seq);
+        let close = |got: f64, want: f64, scale: f64| (got - want).abs() <= 1e-13 * scale;
+        for (i, yi) in new.iter().enumerate() {
+            let scale = yi.dot(yi);
+            for (j, yj) in new.iter().enumerate() {
+                let want = if j <= i { yi.dot(yj) } else { 0.0 };
+                assert!(close(g_new[(i, j)], want, scale), "{size:?} new {i}, {j}");
+            }
+            for (j, yj) in old.iter().enumerate() {
+                assert!(
+                    close(g_old[(i, j)], yi.dot(yj), scale),
+                    "{size:?} old {i}, {j}"
+                );
+            }
+        }
+        // nothing new: nothing to compute
+        let (g_new, g_old, flops) = gram(&[], &refs(old), faer::Par::Seq);
+        assert_eq!(
+            (g_new.nrows(), g_old.nrows(), g_old.ncols()),
+            (0, 0, old.len())
+        );
+        assert_eq!(flops, 0.0);
     }
 }
 
