@@ -27,7 +27,11 @@
 //! so L is read once per batch. On the demo's whole construction the
 //! 40,452 columns took 4.3 s instead of 13.1 s one at a time; on the
 //! Xiaowan-like complete dam the 4,546 columns 10.9 s instead of 84.2 s
-//! (`groutready study perf`, 27 Nov 2026).
+//! (`groutready study perf`, 27 Nov 2026). The batches are made in the
+//! factor's order (`CholeskySolver::forward_reach_many`), where neighbours
+//! share most of their reaches: the Xiaowan-like arch's days 913–916 took
+//! 8.5–8.8 s for their 5,962 columns against 13.4–13.5 s batched in dof
+//! order (29 Nov 2026, alternated).
 //!
 //! Verified by `tests/it/fem_sparse.rs`: forward then backward equals a
 //! full solve; a reach column equals the dense forward solve of the same
@@ -420,7 +424,12 @@ pub struct ReachWork {
 
 /// Columns [`forward_reach_many`] solves together at most: each block of
 /// L is then read once per batch, in matrix products, instead of once per
-/// column in scalar loops.
+/// column in scalar loops. A batch computes each of its columns on every
+/// block of the union of their reaches (zeros outside a column's own), so
+/// larger batches waste flops on the leaves: with the columns in the
+/// factor's order, the Xiaowan-like arch's days 913–916 took 8.5–8.8 s
+/// for their 5,962 columns at 32, 9.8–10.0 s at 64 and 10.9 s at 16 (29
+/// Nov 2026, alternated).
 pub const REACH_BATCH: usize = 32;
 
 /// L⁻¹ u of several columns at once (each its entries: row in the permuted

@@ -566,23 +566,26 @@ impl CholeskySolver {
             }
         }
         let t = Instant::now();
-        let mut out = Vec::with_capacity(columns.len());
-        for batch in columns.chunks(REACH_BATCH) {
-            let permuted: Vec<Vec<(usize, f64)>> = batch
-                .iter()
-                .map(|col| {
-                    col.iter()
-                        .map(|&(i, v)| (self.permuted_row(i), v))
-                        .collect()
-                })
-                .collect();
-            out.extend(forward_reach_many(
-                &self.symbolic,
-                &self.l_values,
-                &self.tree,
-                &permuted,
-                work,
-            ));
+        let permuted: Vec<Vec<(usize, f64)>> = columns
+            .iter()
+            .map(|col| {
+                col.iter()
+                    .map(|&(i, v)| (self.permuted_row(i), v))
+                    .collect()
+            })
+            .collect();
+        // batched in the factor's order: neighbours in it share the most
+        // of their reaches, so a batch's union holds few blocks only some
+        // of its columns need
+        let mut order: Vec<usize> = (0..columns.len()).collect();
+        order.sort_by_key(|&c| permuted[c].iter().map(|e| e.0).min());
+        let mut out = vec![ReachColumn::default(); columns.len()];
+        for batch in order.chunks(REACH_BATCH) {
+            let cols: Vec<Vec<(usize, f64)>> = batch.iter().map(|&c| permuted[c].clone()).collect();
+            let ys = forward_reach_many(&self.symbolic, &self.l_values, &self.tree, &cols, work);
+            for (&c, y) in batch.iter().zip(ys) {
+                out[c] = y;
+            }
         }
         let seconds = t.elapsed().as_secs_f64();
         self.record(|s| {

@@ -872,7 +872,8 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
 /// the capacitance matrices use) equal the products pair by pair, on and
 /// below the diagonal of the new columns' block and against the old
 /// columns, and are zero above that diagonal; on a simplicial and a
-/// supernodal factor, with columns whose reaches overlap in part.
+/// supernodal factor, with columns whose reaches overlap in part (and
+/// solved in batches in the factor's order, each equal to its own solve).
 #[test]
 fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
     use groutready::fem::half_solves::gram;
@@ -885,13 +886,21 @@ fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
             CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
         solver.factorize(&a).unwrap();
         let mut work = groutready::fem::ReachWork::default();
-        let mut columns: Vec<Vec<(usize, f64)>> = (0..23)
+        // more than a batch (`REACH_BATCH`), solved in the factor's order
+        // and returned in this one
+        let mut columns: Vec<Vec<(usize, f64)>> = (0..47)
             .map(|k| vec![((k * 7919) % n, rng.range(-2.0, 2.0))])
             .collect();
         let mut column = Vec::new();
         a.column(n / 2, |i, v| column.push((i, v)));
         columns.push(column);
         let ys = solver.forward_reach_many(&columns, &mut work).unwrap();
+        for (entries, together) in columns.iter().zip(&ys) {
+            let alone = solver.forward_reach(entries, &mut work).unwrap();
+            assert!(alone.rows().eq(together.rows()), "{size:?}: the same reach");
+            let (diff, scale) = max_difference(&together.to_dense(n), &alone.to_dense(n));
+            assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
+        }
         let (new, old) = ys.split_at(9);
         fn refs(s: &[ReachColumn]) -> Vec<&ReachColumn> {
             s.iter().collect()
