@@ -824,12 +824,7 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
         ];
         // solved together: each on its own reach, its single solve's values
         let batch = solver.forward_reach_many(&columns, &mut work).unwrap();
-        for (entries, together) in columns.iter().zip(&batch) {
-            let alone = solver.forward_reach(entries, &mut work).unwrap();
-            assert!(alone.rows().eq(together.rows()), "{size:?}: the same reach");
-            let (diff, scale) = max_difference(&together.to_dense(n), &alone.to_dense(n));
-            assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
-        }
+        assert_each_its_single_solve(&solver, &columns, &batch, &format!("{size:?}"));
         for entries in columns {
             let y = solver.forward_reach(&entries, &mut work).unwrap();
             let mut dense = vec![0.0; n];
@@ -895,12 +890,7 @@ fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
         a.column(n / 2, |i, v| column.push((i, v)));
         columns.push(column);
         let ys = solver.forward_reach_many(&columns, &mut work).unwrap();
-        for (entries, together) in columns.iter().zip(&ys) {
-            let alone = solver.forward_reach(entries, &mut work).unwrap();
-            assert!(alone.rows().eq(together.rows()), "{size:?}: the same reach");
-            let (diff, scale) = max_difference(&together.to_dense(n), &alone.to_dense(n));
-            assert!(diff <= 1e-13 * scale, "{size:?}: {diff:e} of {scale:e}");
-        }
+        assert_each_its_single_solve(&solver, &columns, &ys, &format!("{size:?}"));
         let (new, old) = ys.split_at(9);
         fn refs(s: &[ReachColumn]) -> Vec<&ReachColumn> {
             s.iter().collect()
@@ -927,6 +917,24 @@ fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
             (0, 0, old.len())
         );
         assert_eq!(flops, 0.0);
+    }
+}
+
+/// Each column of a batch of reach solves (`forward_reach_many`) equals
+/// its single solve, on the same reach.
+fn assert_each_its_single_solve(
+    solver: &CholeskySolver,
+    columns: &[Vec<(usize, f64)>],
+    batch: &[ReachColumn],
+    label: &str,
+) {
+    let mut work = groutready::fem::ReachWork::default();
+    for (entries, together) in columns.iter().zip(batch) {
+        let alone = solver.forward_reach(entries, &mut work).unwrap();
+        assert!(alone.rows().eq(together.rows()), "{label}: the same reach");
+        let n = solver.n();
+        let (diff, scale) = max_difference(&together.to_dense(n), &alone.to_dense(n));
+        assert!(diff <= 1e-13 * scale, "{label}: {diff:e} of {scale:e}");
     }
 }
 
