@@ -478,6 +478,15 @@ impl Capacitance {
             })
     }
 
+    /// The columns a coupling borders the factor with: its reaction row's
+    /// (a released row's) and its loads' on rows free in the base (fixed
+    /// rows' unit columns).
+    fn coupling_keys<'c>(&'c self, c: &'c Coupling) -> impl Iterator<Item = (u32, RowChange)> + 'c {
+        let loads = c.loads.iter().filter(|&&(t, _)| !self.base[t as usize]);
+        std::iter::once((c.reaction_row, RowChange::Released))
+            .chain(loads.map(|&(t, _)| (t, RowChange::Fixed)))
+    }
+
     /// The column of Y of a change.
     fn y_of(&self, &(dof, change): &(u32, RowChange)) -> u32 {
         self.index[&(dof, change.column_key())]
@@ -552,11 +561,7 @@ impl Capacitance {
         let keys = changes
             .iter()
             .copied()
-            .chain(couplings.iter().flat_map(|c| {
-                let loads = c.loads.iter().filter(|&&(t, _)| !self.base[t as usize]);
-                std::iter::once((c.reaction_row, RowChange::Released))
-                    .chain(loads.map(|&(t, _)| (t, RowChange::Fixed)))
-            }));
+            .chain(couplings.iter().flat_map(|c| self.coupling_keys(c)));
         let keys = self.new_keys(keys);
         self.fill_columns(solver, a, keys)?;
         let border = Border { changes, couplings };
@@ -955,11 +960,11 @@ impl Capacitance {
         }
         let changes = &border.changes;
         let cols: Vec<u32> = changes.iter().map(|c| self.y_of(c)).collect();
-        let coupled = border.couplings.iter().flat_map(|c| {
-            let loads = c.loads.iter().filter(|&&(t, _)| !self.base[t as usize]);
-            std::iter::once(self.y_of(&(c.reaction_row, RowChange::Released)))
-                .chain(loads.map(|&(t, _)| self.y_of(&(t, RowChange::Fixed))))
-        });
+        let coupled = border
+            .couplings
+            .iter()
+            .flat_map(|c| self.coupling_keys(c))
+            .map(|key| self.y_of(&key));
         let every: Vec<u32> = cols.iter().copied().chain(coupled).collect();
         self.fill_dots(every, par);
         let mut s = Mat::<f64>::zeros(size, size);

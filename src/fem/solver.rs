@@ -566,7 +566,7 @@ impl CholeskySolver {
             }
         }
         let t = Instant::now();
-        let permuted: Vec<Vec<(usize, f64)>> = columns
+        let mut permuted: Vec<Vec<(usize, f64)>> = columns
             .iter()
             .map(|col| {
                 col.iter()
@@ -581,7 +581,10 @@ impl CholeskySolver {
         order.sort_by_key(|&c| permuted[c].iter().map(|e| e.0).min());
         let mut out = vec![ReachColumn::default(); columns.len()];
         for batch in order.chunks(REACH_BATCH) {
-            let cols: Vec<Vec<(usize, f64)>> = batch.iter().map(|&c| permuted[c].clone()).collect();
+            let cols: Vec<Vec<(usize, f64)>> = batch
+                .iter()
+                .map(|&c| std::mem::take(&mut permuted[c]))
+                .collect();
             let ys = forward_reach_many(&self.symbolic, &self.l_values, &self.tree, &cols, work);
             for (&c, y) in batch.iter().zip(ys) {
                 out[c] = y;

@@ -862,9 +862,8 @@ impl ActiveSet {
         let k = slipping.len() as f64;
         let border_flops: f64 = slipping
             .iter()
-            .map(|&f| f + 2)
-            .map(|dof| {
-                let (flops, rows) = live.solver.reach_cost(dof as usize);
+            .map(|&f| {
+                let (flops, rows) = live.solver.reach_cost(f as usize + 2);
                 flops + 2.0 * rows as f64 * 3.0 * k
             })
             .sum();
