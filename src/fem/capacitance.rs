@@ -118,14 +118,14 @@ pub const MAX_REFINEMENTS: usize = 3;
 pub const REFINE_TO: f64 = 1e-12;
 
 /// The residual rhs + G (A x)_n − A x of the coupled system on the rows not
-/// in `fixed` (zero on them) and its 2-norm.
+/// in `fixed` (zero on them), its 2-norm, and A x.
 fn free_residual(
     a: &SparseSym,
     fixed: &[bool],
     rhs: &[f64],
     couplings: &[Coupling],
     x: &[f64],
-) -> (Vec<f64>, f64) {
+) -> (Vec<f64>, f64, Vec<f64>) {
     let mut ax = vec![0.0; a.n()];
     a.mul_vec(x, &mut ax);
     let mut r: Vec<f64> = (0..a.n())
@@ -140,7 +140,7 @@ fn free_residual(
         }
     }
     let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
-    (r, norm)
+    (r, norm, ax)
 }
 
 /// ‖b − M x‖ / ‖b‖ of the system M x = b that A with the rows `fixed` held
@@ -222,6 +222,10 @@ pub struct Corrected {
     pub residual: f64,
     /// ‖b − M x‖ itself
     pub residual_norm: f64,
+    /// A x, the matrix given to [`Capacitance::solve`] (fixed columns
+    /// included): the residual's product, which a caller reading reactions
+    /// off the solution need not compute again
+    pub ax: Vec<f64>,
 }
 
 /// A load proportional to a row of A x: each row `t` of `loads` (free in
@@ -576,7 +580,7 @@ impl Capacitance {
         };
         let solved = self.refined(solver, &system, presc, rhs, refine);
         self.s_factor = s_factor;
-        let (x, norm) = solved?;
+        let (x, norm, ax) = solved?;
         let b_norm = constrained_rhs(a, fixed, presc, rhs)
             .iter()
             .map(|v| v * v)
@@ -591,12 +595,13 @@ impl Capacitance {
             x,
             residual,
             residual_norm: norm,
+            ax,
         })
     }
 
     /// One application of the correction, refined on the residual of the
-    /// free rows until it stops improving; returns x and that residual's
-    /// norm.
+    /// free rows until it stops improving; returns x, that residual's norm
+    /// and A x.
     fn refined(
         &mut self,
         solver: &CholeskySolver,
@@ -604,7 +609,7 @@ impl Capacitance {
         presc: &[f64],
         rhs: &[f64],
         target: Refine,
-    ) -> Result<(Vec<f64>, f64), SolveError> {
+    ) -> Result<(Vec<f64>, f64, Vec<f64>), SolveError> {
         let System {
             a, border, fixed, ..
         } = *system;
@@ -613,7 +618,7 @@ impl Capacitance {
             Some(x0) if x0.len() == n => x0,
             _ => self.apply(solver, system, presc, rhs, false)?,
         };
-        let (mut r, mut norm) = free_residual(a, fixed, rhs, &border.couplings, &x);
+        let (mut r, mut norm, mut ax) = free_residual(a, fixed, rhs, &border.couplings, &x);
         let zero = vec![0.0; n];
         let enough = target.to * rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
         for _ in 0..MAX_REFINEMENTS {
@@ -622,14 +627,15 @@ impl Capacitance {
             }
             let dx = self.apply(solver, system, &zero, &r, true)?;
             let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
-            let (r_next, next) = free_residual(a, fixed, rhs, &border.couplings, &refined);
+            let (r_next, next, ax_next) =
+                free_residual(a, fixed, rhs, &border.couplings, &refined);
             self.stats.refinements += 1;
             if next >= norm {
                 break;
             }
-            (x, r, norm) = (refined, r_next, next);
+            (x, r, norm, ax) = (refined, r_next, next, ax_next);
         }
-        Ok((x, norm))
+        Ok((x, norm, ax))
     }
 
     /// One application of the correction (the columns of the border
