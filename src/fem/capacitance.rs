@@ -627,8 +627,7 @@ impl Capacitance {
             }
             let dx = self.apply(solver, system, &zero, &r, true)?;
             let refined: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + d).collect();
-            let (r_next, next, ax_next) =
-                free_residual(a, fixed, rhs, &border.couplings, &refined);
+            let (r_next, next, ax_next) = free_residual(a, fixed, rhs, &border.couplings, &refined);
             self.stats.refinements += 1;
             if next >= norm {
                 break;

@@ -963,7 +963,13 @@ impl ActiveSet {
             &fixed,
             corrected.x,
         )?;
-        Ok((PassSolution { x, ax: corrected.ax }, loose))
+        Ok((
+            PassSolution {
+                x,
+                ax: corrected.ax,
+            },
+            loose,
+        ))
     }
 
     /// The residual a pass is refined to: the answer's once the slip
