@@ -162,27 +162,53 @@ pub fn constrained_residual(
         .collect();
     let mut ax = vec![0.0; a.n()];
     a.mul_vec(&xf, &mut ax);
+    held_norms(fixed, presc, &b, x, |i| b[i] - ax[i]).0
+}
+
+/// The residual of `x` as the solution of the system that A with the rows
+/// `fixed` held at `presc` becomes (b its [`constrained_rhs`]), measured
+/// with the whole product A x: rhs − A x on the free rows and presc − x on
+/// the fixed ones. That is [`constrained_residual`]'s b − M x where x holds
+/// presc on the fixed rows, as a factor of M leaves it (an identity row);
+/// the product is returned for the caller's reactions. Returns
+/// (‖b − M x‖ / ‖b‖, ‖b − M x‖, A x).
+pub fn held_residual(
+    a: &SparseSym,
+    fixed: &[bool],
+    presc: &[f64],
+    rhs: &[f64],
+    b: &[f64],
+    x: &[f64],
+) -> (f64, f64, Vec<f64>) {
+    let mut ax = vec![0.0; a.n()];
+    a.mul_vec(x, &mut ax);
+    let (relative, norm) = held_norms(fixed, presc, b, x, |i| rhs[i] - ax[i]);
+    (relative, norm, ax)
+}
+
+/// (‖r‖ / ‖b‖, ‖r‖) of the residual r = presc − x on the fixed rows and
+/// `free(i)` on the others (‖r‖ alone when b = 0).
+fn held_norms(
+    fixed: &[bool],
+    presc: &[f64],
+    b: &[f64],
+    x: &[f64],
+    free: impl Fn(usize) -> f64,
+) -> (f64, f64) {
     let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..a.n() {
-        let r = if fixed[i] {
-            presc[i] - x[i]
-        } else {
-            b[i] - ax[i]
-        };
+    for i in 0..fixed.len() {
+        let r = if fixed[i] { presc[i] - x[i] } else { free(i) };
         num += r * r;
         den += b[i] * b[i];
     }
-    if den > 0.0 {
-        (num / den).sqrt()
-    } else {
-        num.sqrt()
-    }
+    let norm = num.sqrt();
+    (if den > 0.0 { norm / den.sqrt() } else { norm }, norm)
 }
 
 /// The right-hand side of the system M x = b that A with the rows `fixed`
 /// held at `presc` becomes: `rhs` less the fixed columns' loads on the free
 /// rows, `presc` on the fixed ones.
-fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) -> Vec<f64> {
+pub fn constrained_rhs(a: &SparseSym, fixed: &[bool], presc: &[f64], rhs: &[f64]) -> Vec<f64> {
     let mut b = rhs.to_vec();
     a.dirichlet_correction(fixed, presc, &mut b);
     for i in 0..a.n() {

@@ -80,6 +80,7 @@
 
 use std::time::Instant;
 
+use crate::fem::capacitance::{constrained_rhs, held_residual};
 use crate::fem::{
     relative_residual, Capacitance, CapacitanceStats, Coupling, Refine, SolveError, SparseSym,
     REFINE_TO,
@@ -522,10 +523,8 @@ fn solve_checked(
 
 /// Solves the system of `a` with the rows `fixed` held at `presc` (loads
 /// `rhs` before the held columns' are moved to it) by the factor in `live`,
-/// which must be of exactly that system, and checks it: the residual b − M
-/// x of the held system is rhs − A x on the free rows and presc − x on the
-/// held ones (a held row of the factor is an identity row, so x holds presc
-/// there exactly), so one product A x serves the check and the reactions.
+/// which must be of exactly that system, and checks it with the one
+/// product A x the reactions read too ([`held_residual`]).
 fn solve_held(
     live: &LiveSystem,
     a: &SparseSym,
@@ -534,30 +533,11 @@ fn solve_held(
     rhs: &[f64],
     out: &mut JointStepOutcome,
 ) -> Result<PassSolution, JointStepError> {
-    let mut b = rhs.to_vec();
-    a.dirichlet_correction(fixed, presc, &mut b);
-    for i in 0..live.n {
-        if fixed[i] {
-            b[i] = presc[i];
-        }
-    }
+    let b = constrained_rhs(a, fixed, presc, rhs);
     let mut x = b.clone();
     live.solver.solve_in_place(&mut x)?;
     out.solves += 1;
-    let mut ax = vec![0.0; live.n];
-    a.mul_vec(&x, &mut ax);
-    let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..live.n {
-        let r = if fixed[i] {
-            presc[i] - x[i]
-        } else {
-            rhs[i] - ax[i]
-        };
-        num += r * r;
-        den += b[i] * b[i];
-    }
-    let norm = num.sqrt();
-    let relative = if den > 0.0 { norm / den.sqrt() } else { norm };
+    let (relative, norm, ax) = held_residual(a, fixed, presc, rhs, &b, &x);
     let x = accept(relative, norm, a, fixed, x)?;
     Ok(PassSolution { x, ax })
 }

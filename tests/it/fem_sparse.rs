@@ -594,6 +594,24 @@ fn capacitance_correction_on_grid(size: [usize; 3], ordering: Ordering, supernod
             corrected.residual,
             unformed(&x)
         );
+        // the product the correction returns is A x of its answer, and the
+        // held residual measured with it (rhs − A x free, presc − x held)
+        // is the same quantity again
+        let mut ax = vec![0.0; n];
+        a.mul_vec(&x, &mut ax);
+        assert_eq!(corrected.ax, ax, "{name}");
+        let b = groutready::fem::capacitance::constrained_rhs(&a, &fixed, &presc, &rhs);
+        let (held, held_norm, held_ax) =
+            groutready::fem::capacitance::held_residual(&a, &fixed, &presc, &rhs, &b, &x);
+        assert_eq!(held_ax, ax, "{name}");
+        assert!(
+            (held - unformed(&x)).abs() <= 1e-14 && (held - corrected.residual).abs() <= 1e-14,
+            "{name}: {held:e} vs {:e} and {:e}",
+            unformed(&x),
+            corrected.residual
+        );
+        let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+        assert!((held_norm / b_norm - held).abs() <= 1e-12 * held, "{name}");
         let mut off = x.clone();
         off[1] += 0.1;
         off[2] -= 0.2;
