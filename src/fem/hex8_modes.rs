@@ -157,7 +157,7 @@ pub fn modes(
     let mut k_aa = Mat9::zeros();
     for (gm, gp) in g.iter().zip(gauss) {
         let qg = q * gm * gp.weight;
-        k_au += qg.transpose() * gp.b;
+        k_au += qg.transpose() * gp.b();
         k_aa += gm.transpose() * qg;
     }
     let k_aa = 0.5 * (k_aa + k_aa.transpose());

@@ -922,6 +922,38 @@ fn initial_strain_load_and_internal_force_match_k_times_u() {
     }
 }
 
+/// The strains and the Bᵀ sums walk the gradients the Gauss points keep,
+/// skipping B's structural zeros: they must give the dense products of B
+/// to the bit, so the runs they serve keep every bit of their results.
+#[test]
+fn strains_and_bt_sums_from_gradients_equal_the_dense_b_products_to_the_bit() {
+    let g = gauss_points(&distorted_hex()).unwrap();
+    let mut rng = Rng(7);
+    let u: [f64; 24] = std::array::from_fn(|_| rng.range(-1e-3, 1e-3));
+    let s: [[f64; 6]; 8] = std::array::from_fn(|_| std::array::from_fn(|_| rng.range(-5e6, 5e6)));
+    let mut dense = [0.0; 24];
+    for (gp, si) in g.iter().zip(&s) {
+        let b = gp.b();
+        // ε = B u, row by row in column order
+        let mut e = [0.0; 6];
+        for r in 0..6 {
+            for k in 0..24 {
+                e[r] += b[(r, k)] * u[k];
+            }
+        }
+        assert_eq!(strain(gp, &u), e);
+        // f += (Bᵀ σ) w, column by column in row order
+        for k in 0..24 {
+            let mut acc = 0.0;
+            for r in 0..6 {
+                acc += b[(r, k)] * si[r];
+            }
+            dense[k] += acc * gp.weight;
+        }
+    }
+    assert_eq!(internal_force(&g, &s), dense);
+}
+
 #[test]
 fn body_force_sums_to_rho_g_v() {
     let (rho, grav) = (2400.0, 9.81);
