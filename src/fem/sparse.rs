@@ -507,6 +507,41 @@ impl SparseSym {
         }
     }
 
+    /// Adds alpha · k for a symmetric element matrix given by its upper
+    /// triangle row by row (`packed`, n_e (n_e + 1) / 2 entries; e.g.
+    /// [`super::elasticity::PackedSym24`]): the sums of
+    /// [`SparseSym::add_element_scaled`] to the bit, reading half as much.
+    ///
+    /// # Panics
+    /// If `packed` does not have the slot's n_e (n_e + 1) / 2 entries.
+    #[inline]
+    pub fn add_packed_scaled(&mut self, slot: usize, alpha: f64, packed: &[f64]) {
+        let p = &*self.pattern;
+        let dofs = p.element_dofs(slot);
+        let sc = p.scatter_index(slot);
+        assert_eq!(
+            packed.len(),
+            sc.len(),
+            "element slot {slot}: packed matrix length"
+        );
+        let ne = dofs.len();
+        let mut idx = 0;
+        for a in 0..ne {
+            for b in a..ne {
+                let (v, mut x) = (sc[idx], packed[idx]);
+                idx += 1;
+                if v == SKIP {
+                    continue;
+                }
+                // k_ab + k_ba of two local dofs on one global dof
+                if a != b && dofs[a] == dofs[b] {
+                    x += x;
+                }
+                self.values[v as usize] += alpha * x;
+            }
+        }
+    }
+
     /// Adds a diagonal element matrix (lumped capacity, lumped convection):
     /// entry a of `d` goes to the diagonal of the slot's dof a.
     #[inline]

@@ -11,7 +11,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::fem::elasticity::{self, Mat24, SolidGauss};
+use crate::fem::elasticity::{self, PackedSym24, SolidGauss};
 use crate::fem::hex8_modes::{self, Modes};
 use crate::fem::SparseSym;
 use crate::material::creep::{self, StepCoefficients};
@@ -237,7 +237,7 @@ impl Frame {
     ) {
         match &el.k_unit {
             Some(k) => a.add_element_scaled(slot, modulus, k),
-            None => a.add_element_scaled(slot, modulus, &self.tables.k_unit[el.elem as usize]),
+            None => a.add_packed_scaled(slot, modulus, &self.tables.k_unit[el.elem as usize].0),
         }
     }
 
@@ -404,7 +404,7 @@ pub(super) struct ElementTables {
     pub(super) gauss: Vec<[SolidGauss; 8]>,
     /// stiffness at unit modulus (the modulus ages, ν does not); with the
     /// incompatible modes, the condensed one
-    pub(super) k_unit: Vec<Mat24>,
+    pub(super) k_unit: Vec<PackedSym24>,
     /// the incompatible modes of each element (`solver.element =
     /// "hex8_incompatible"`; empty with the plain hex8)
     pub(super) modes: Vec<Modes>,
@@ -453,10 +453,11 @@ impl ElementTables {
             if settings.element == SolidElement::Hex8Incompatible {
                 let (k, m) = hex8_modes::modes(&coords, &g, &q)
                     .map_err(|source| MechError::Element { element: e, source })?;
-                t.k_unit.push(k);
+                t.k_unit.push(PackedSym24::from_upper(&k));
                 t.modes.push(m);
             } else {
-                t.k_unit.push(elasticity::stiffness(&g, &q));
+                t.k_unit
+                    .push(PackedSym24::from_upper(&elasticity::stiffness(&g, &q)));
             }
             t.gauss.push(g);
             t.nu.push(n);

@@ -40,7 +40,7 @@ use std::time::Instant;
 
 use nalgebra::DMatrix;
 
-use crate::fem::elasticity::Mat24;
+use crate::fem::elasticity::PackedSym24;
 use crate::fem::{
     metis_nested_dissection, CholeskySolver, MetisError, Ordering, Pattern, SolveError, SparseSym,
     NO_DOF,
@@ -174,7 +174,7 @@ pub enum LiveError {
 pub struct ElementSet<'a> {
     pub conn: &'a [[u32; 8]],
     pub live: &'a [bool],
-    pub k_unit: &'a [Mat24],
+    pub k_unit: &'a [PackedSym24],
     pub ties: &'a Ties,
     /// the rock to condense, when every one of its unknowns is live
     pub rock: Option<&'a Arc<CondensedRock>>,
@@ -249,8 +249,8 @@ impl LiveSystem {
             .map(|el| {
                 let k_unit = el.terms.as_ref().map(|terms| {
                     let t = transform(terms, el.dofs.len(), &pairs, points);
-                    let k = k_unit[el.elem as usize].as_slice();
-                    t.transpose() * DMatrix::from_column_slice(24, 24, k) * &t
+                    let k = k_unit[el.elem as usize].to_full();
+                    t.transpose() * DMatrix::from_column_slice(24, 24, k.as_slice()) * &t
                 });
                 let condensed = el.dofs.iter().all(|&d| d as usize >= n);
                 LiveElement {

@@ -105,7 +105,7 @@ pub struct RockElements<'a> {
     /// rock or not, per element
     pub rock: &'a [bool],
     /// the unit-modulus stiffness of each element
-    pub k_unit: &'a [crate::fem::elasticity::Mat24],
+    pub k_unit: &'a [crate::fem::elasticity::PackedSym24],
     /// the rock's modulus [Pa]
     pub modulus: f64,
     /// supported global node dofs
@@ -366,7 +366,7 @@ fn assemble(rock: &RockElements, index: &[u32], held: &[bool], n: usize) -> Asse
     let mut a = SparseSym::new(Arc::new(Pattern::new(n, &lists)));
     let (mut coupling, mut held_to_r, mut held_to_d) = (Vec::new(), Vec::new(), Vec::new());
     for (slot, &e) in touching.iter().enumerate() {
-        a.add_element_scaled(slot, rock.modulus, &rock.k_unit[e]);
+        a.add_packed_scaled(slot, rock.modulus, &rock.k_unit[e].0);
         let gd = global(e);
         for (ka, &ga) in gd.iter().enumerate() {
             let r = index[ga as usize];
@@ -374,7 +374,7 @@ fn assemble(rock: &RockElements, index: &[u32], held: &[bool], n: usize) -> Asse
                 continue;
             }
             for (kb, &gb) in gd.iter().enumerate() {
-                let v = rock.modulus * rock.k_unit[e][(ka, kb)];
+                let v = rock.modulus * rock.k_unit[e].get(ka, kb);
                 match (held[r as usize], index[gb as usize]) {
                     (false, NONE) => coupling.push((r, gb, v)),
                     (true, NONE) => held_to_d.push((r, gb, v)),
@@ -515,7 +515,7 @@ mod tests {
     fn block() -> (
         Vec<[u32; 8]>,
         Vec<bool>,
-        Vec<crate::fem::elasticity::Mat24>,
+        Vec<crate::fem::elasticity::PackedSym24>,
         usize,
     ) {
         let m = 8usize;
@@ -537,7 +537,9 @@ mod tests {
                     });
                     let g = crate::fem::elasticity::gauss_points(&coords).unwrap();
                     let q = crate::fem::elasticity::poisson_matrix(0.22);
-                    k_unit.push(crate::fem::elasticity::stiffness(&g, &q));
+                    k_unit.push(crate::fem::elasticity::PackedSym24::from_upper(
+                        &crate::fem::elasticity::stiffness(&g, &q),
+                    ));
                 }
             }
         }
@@ -587,7 +589,7 @@ mod tests {
         // the whole system
         let mut whole = SparseSym::new(pattern.clone());
         for (e, k) in k_unit.iter().enumerate() {
-            whole.add_element_scaled(e, if rock_el[e] { e_rock } else { e_conc }, k);
+            whole.add_packed_scaled(e, if rock_el[e] { e_rock } else { e_conc }, &k.0);
         }
         let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 23) as f64 - 11.0).collect();
         let mut b_w = b.clone();
@@ -638,7 +640,7 @@ mod tests {
         );
         let mut s = SparseSym::new(Arc::new(Pattern::new(nd, &d_lists)));
         for (e, k) in k_unit.iter().enumerate() {
-            s.add_element_scaled(e, if rock_el[e] { e_rock } else { e_conc }, k);
+            s.add_packed_scaled(e, if rock_el[e] { e_rock } else { e_conc }, &k.0);
         }
         for (t, bl) in cr.blocks.iter().enumerate() {
             s.add_element(conn.len() + t, &bl.minus_c);

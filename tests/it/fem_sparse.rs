@@ -263,6 +263,38 @@ fn repeated_and_missing_dofs_assemble_like_dense() {
     assert_eq!(a.get(6, 6), 0.0);
 }
 
+/// A symmetric element matrix by its packed upper triangle assembles the
+/// same bits as the full matrix, repeated and missing dofs included.
+#[test]
+fn packed_element_matrices_assemble_like_full_ones_to_the_bit() {
+    let slots: Vec<Vec<u32>> = vec![vec![0, 1, 1, 2], vec![3, NO_DOF, 4, 0], vec![2, 5, 4, 3]];
+    let p = Arc::new(Pattern::new(7, &slots));
+    let (mut full, mut packed) = (SparseSym::new(p.clone()), SparseSym::new(p.clone()));
+    let mut rng = Rng(11);
+    for s in 0..slots.len() {
+        let r = DMatrix::from_fn(4, 4, |_, _| rng.range(-1.0, 1.0));
+        let k = &r * r.transpose();
+        let k = (&k + k.transpose()) * 0.5;
+        let upper: Vec<f64> = (0..4)
+            .flat_map(|a| (a..4).map(move |b| (a, b)))
+            .map(|(a, b)| k[(a, b)])
+            .collect();
+        full.add_element_scaled(s, 2.5e10, &k);
+        packed.add_packed_scaled(s, 2.5e10, &upper);
+    }
+    assert_eq!(full.values(), packed.values());
+    // the hex8's packed stiffness reads back as the full one
+    let unit = [[0., 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]];
+    let c: [[f64; 3]; 8] = std::array::from_fn(|i| {
+        let [x, y, _] = unit[i % 4];
+        let z = (i / 4) as f64;
+        [x + 0.1 * y, y + 0.05 * z, z + 0.2 * x * y]
+    });
+    let k = groutready::fem::elasticity::stiffness_of(&c, 1.0, 0.2).unwrap();
+    let pk = groutready::fem::elasticity::PackedSym24::from_upper(&k);
+    assert_eq!(pk.to_full(), k);
+}
+
 #[test]
 fn pattern_rejects_out_of_range_dofs() {
     let slots = [[0u32, 1, 5]];
