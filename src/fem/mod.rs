@@ -46,7 +46,10 @@ pub use capacitance::{
 pub use elasticity::{isotropic_d, poisson_matrix, principal_stresses, von_mises, SolidGauss};
 pub use error::ElementError;
 pub use half_solves::{ReachColumn, ReachWork};
-pub use ordering::{metis_nested_dissection, nested_dissection, MetisError, Ordering};
+pub use ordering::{
+    metis_nested_dissection, metis_nested_dissection_with, nested_dissection, MetisError,
+    MetisKnobs, Ordering,
+};
 pub use quadrature::{gauss_hex, gauss_legendre, gauss_quad, Rule};
 pub use solver::{relative_residual, CholeskySolver, SolveError, SolverStats};
 pub use sparse::{Pattern, PatternError, SparseSym, NO_DOF};

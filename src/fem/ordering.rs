@@ -30,13 +30,37 @@ pub struct MetisError {
     pub n: usize,
 }
 
+/// Knobs of `METIS_NodeND`; None keeps METIS's default.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MetisKnobs {
+    /// separators computed at each bisection, the smallest kept
+    /// (`METIS_OPTION_NSEPS`; METIS: 1)
+    pub separators: Option<i32>,
+    /// imbalance allowed between the two parts of a bisection, in
+    /// thousandths (`METIS_OPTION_UFACTOR`; METIS: 200 for NodeND)
+    pub imbalance: Option<i32>,
+}
+
 /// METIS's nested-dissection elimination order of the graph of `pattern`
-/// (see [`Ordering::Custom`]). Deterministic: METIS seeds its generator
+/// (see [`Ordering::Custom`]) with METIS's default knobs.
+pub fn metis_nested_dissection(pattern: &Pattern) -> Result<Vec<u32>, MetisError> {
+    metis_nested_dissection_with(pattern, MetisKnobs::default())
+}
+
+/// METIS's nested-dissection elimination order of the graph of `pattern`
+/// with `knobs`. Deterministic: METIS seeds its generator
 /// with a fixed value at each call, and the calls are serialised because
 /// that generator is process-global (two plans in two threads otherwise
 /// got different orderings, and results that differed in the last bits).
-pub fn metis_nested_dissection(pattern: &Pattern) -> Result<Vec<u32>, MetisError> {
-    use metis_sys::{idx_t, METIS_NodeND, METIS_SetDefaultOptions, METIS_NOPTIONS};
+pub fn metis_nested_dissection_with(
+    pattern: &Pattern,
+    knobs: MetisKnobs,
+) -> Result<Vec<u32>, MetisError> {
+    use metis_sys::{
+        idx_t, moptions_et_METIS_OPTION_NSEPS as NSEPS,
+        moptions_et_METIS_OPTION_UFACTOR as UFACTOR, METIS_NodeND, METIS_SetDefaultOptions,
+        METIS_NOPTIONS,
+    };
     let n = pattern.n_dofs();
     if n <= 1 {
         return Ok((0..n as u32).collect());
@@ -61,6 +85,11 @@ pub fn metis_nested_dissection(pattern: &Pattern) -> Result<Vec<u32>, MetisError
     // calls; a null vwgt means unit weights.
     let status = unsafe {
         METIS_SetDefaultOptions(options.as_mut_ptr());
+        for (key, value) in [(NSEPS, knobs.separators), (UFACTOR, knobs.imbalance)] {
+            if let Some(v) = value {
+                options[key as usize] = v as idx_t;
+            }
+        }
         METIS_NodeND(
             &mut nvtxs,
             xadj.as_mut_ptr(),

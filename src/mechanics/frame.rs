@@ -320,7 +320,7 @@ fn ordering_plan(
             let c =
                 ConstructionOrdering::new(&mesh.elements, points, mesh.nodes.len(), ties, merge)
                     .map_err(|source| MechError::Live { day: 0.0, source })?;
-            costs.metis_calls += 1;
+            costs.metis_calls += c.metis_calls;
             costs.seconds_ordering += c.seconds;
             OrderingPlan::Construction(Arc::new(c))
         }
