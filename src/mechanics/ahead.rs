@@ -59,8 +59,12 @@
 //! one being factorised).
 //!
 //! The factor is made only when the driver can name the next step
-//! ([`FactorAhead::set_next`]) and no zone is grouted at its start (a
-//! zone's springs would exceed the break-even). When lifts are poured at
+//! ([`FactorAhead::set_next`]). When zones are grouted at its start, the
+//! guess opens their points: the step frees the rows the layers bond and
+//! adds their springs to the diagonal, a change the correction takes
+//! (`MechanicsModel::grouted_guess`); guessed as this step's states, the
+//! layers' rows and springs together passed the break-even and the step
+//! factorised on its own thread. When lifts are poured at
 //! its start, the next live set is numbered and analysed ahead too
 //! ([`Births`]), its new joint pairs guessed in the state a rebuild gives
 //! them, and the rebuild after the pours adopts that system if its live
@@ -87,6 +91,7 @@ use crate::material::creep::StepCoefficients;
 use super::contact_step::Prepared;
 use super::joints::JointPointState;
 use super::live::{LiveSystem, PARALLEL_FROM_DOFS};
+use crate::vocab::ZoneId;
 
 /// The largest factor [bytes] a second copy is kept of: two factors of the
 /// complete Xiaowan-like arch (324M entries, 2.6 GB each) would pass its
@@ -175,6 +180,8 @@ pub struct NextStep {
     pub interval: (f64, f64),
     /// the lifts (block, lift) poured at its start
     pub pours: Vec<(u32, u32)>,
+    /// the zones grouted at its start
+    pub grouting: Vec<ZoneId>,
 }
 
 /// The live system of a next step whose start pours lifts: numbered and
@@ -456,8 +463,7 @@ impl FactorAhead {
         }
     }
 
-    /// The step after the one about to run, or None when its start grouts
-    /// a zone (or it is unknown).
+    /// The step after the one about to run, or None when it is unknown.
     pub fn set_next(&mut self, next: Option<NextStep>) {
         self.next = next.filter(|_| self.enabled);
     }

@@ -896,11 +896,9 @@ fn next_mechanical_step(
         return None;
     }
     ladder.grow(time);
-    let mut pours = Vec::new();
+    let (mut pours, mut grouting) = (Vec::new(), Vec::new());
     if let Some(events) = timeline.at(t1) {
-        if !events.grouting.is_empty() {
-            return None;
-        }
+        grouting = events.grouting.clone();
         pours = events.pours.iter().map(|&(b, l, _)| (b, l)).collect();
         if events.stage_change || !pours.is_empty() {
             ladder.restart(time, t1);
@@ -914,6 +912,7 @@ fn next_mechanical_step(
             return Some(NextStep {
                 interval: (t1, t),
                 pours,
+                grouting,
             });
         }
     }
