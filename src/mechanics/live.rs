@@ -638,12 +638,9 @@ fn least_flops_order(pattern: Pattern) -> Result<Vec<u32>, LiveError> {
     let mut best: Option<(f64, Vec<u32>)> = None;
     for knobs in CONSTRUCTION_KNOBS {
         let fwd = metis_nested_dissection_with(&pattern, knobs)?;
-        let ordering = Ordering::Custom(fwd);
+        let ordering = Ordering::Custom(fwd.clone());
         let flops = CholeskySolver::with_options(pattern.clone(), &ordering, faer::Par::Seq)?
             .factor_flops();
-        let Ordering::Custom(fwd) = ordering else {
-            unreachable!("made custom above")
-        };
         if best.as_ref().is_none_or(|(f, _)| flops < *f) {
             best = Some((flops, fwd));
         }
