@@ -480,31 +480,14 @@ impl SparseSym {
         alpha: f64,
         k: &Matrix<f64, R, C, S>,
     ) {
-        let p = &*self.pattern;
-        let dofs = p.element_dofs(slot);
-        let sc = p.scatter_index(slot);
-        let ne = dofs.len();
+        let ne = self.pattern.element_dofs(slot).len();
         assert!(
             k.nrows() == ne && k.ncols() == ne,
             "element slot {slot} has {ne} dofs, got a {}x{} matrix",
             k.nrows(),
             k.ncols()
         );
-        let mut idx = 0;
-        for a in 0..ne {
-            for b in a..ne {
-                let v = sc[idx];
-                idx += 1;
-                if v == SKIP {
-                    continue;
-                }
-                let mut x = k[(a, b)];
-                if a != b && dofs[a] == dofs[b] {
-                    x += k[(b, a)];
-                }
-                self.values[v as usize] += alpha * x;
-            }
-        }
+        self.scatter_upper(slot, alpha, |_, r, c| k[(r, c)]);
     }
 
     /// Adds alpha · k for a symmetric element matrix given by its upper
@@ -516,26 +499,41 @@ impl SparseSym {
     /// If `packed` does not have the slot's n_e (n_e + 1) / 2 entries.
     #[inline]
     pub fn add_packed_scaled(&mut self, slot: usize, alpha: f64, packed: &[f64]) {
+        assert_eq!(
+            packed.len(),
+            self.pattern.scatter_index(slot).len(),
+            "element slot {slot}: packed matrix length"
+        );
+        self.scatter_upper(slot, alpha, |idx, _, _| packed[idx]);
+    }
+
+    /// The scatter of both element adds: over the slot's upper triangle in
+    /// the order of its scatter index, `entry(idx, r, c)` gives k_rc, `idx`
+    /// the position of {r, c} in that triangle; k_ba is added to k_ab where
+    /// local dofs a and b are one global dof (a repeated node).
+    #[inline(always)]
+    fn scatter_upper(
+        &mut self,
+        slot: usize,
+        alpha: f64,
+        entry: impl Fn(usize, usize, usize) -> f64,
+    ) {
         let p = &*self.pattern;
         let dofs = p.element_dofs(slot);
         let sc = p.scatter_index(slot);
-        assert_eq!(
-            packed.len(),
-            sc.len(),
-            "element slot {slot}: packed matrix length"
-        );
         let ne = dofs.len();
         let mut idx = 0;
         for a in 0..ne {
             for b in a..ne {
-                let (v, mut x) = (sc[idx], packed[idx]);
+                let v = sc[idx];
+                let at = idx;
                 idx += 1;
                 if v == SKIP {
                     continue;
                 }
-                // k_ab + k_ba of two local dofs on one global dof
+                let mut x = entry(at, a, b);
                 if a != b && dofs[a] == dofs[b] {
-                    x += x;
+                    x += entry(at, b, a);
                 }
                 self.values[v as usize] += alpha * x;
             }

@@ -62,7 +62,7 @@
 //! ([`FactorAhead::set_next`]). When zones are grouted at its start, the
 //! guess opens their points: the step frees the rows the layers bond and
 //! adds their springs to the diagonal, a change the correction takes
-//! (`MechanicsModel::grouted_guess`); guessed as this step's states, the
+//! (`MechanicsModel::grouting_guess`); guessed as this step's states, the
 //! layers' rows and springs together passed the break-even and the step
 //! factorised on its own thread. When lifts are poured at
 //! its start, the next live set is numbered and analysed ahead too

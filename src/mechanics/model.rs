@@ -12,7 +12,7 @@ use crate::fem::{CapacitanceStats, SparseSym};
 use crate::material::creep::{self, CreepState, StepCoefficients};
 use crate::material::Poisson;
 use crate::mesh::{Mesh, SurfaceKind, ZoneSite};
-use crate::vocab::JointState;
+use crate::vocab::{JointState, ZoneId};
 
 use super::ahead::{
     AheadStats, Analysed, Assembled, Births, BirthsPlacement, BuildBirths, FactorAhead,
@@ -548,10 +548,11 @@ impl MechanicsModel {
             j.grout_shear_modulus_pa,
             j.grout_modulus_pa,
         ];
+        let id = ZoneId::new(joint, zone);
         let mut n = 0;
         for (p, pt) in self.frame.points.iter().enumerate() {
             let st = &mut self.state.joints[p];
-            if pt.joint != joint || pt.zone != zone || !st.paired || st.grout.is_some() {
+            if !takes_grout(pt, st, id) {
                 continue;
             }
             let aperture = st.gap.max(0.0);
@@ -579,12 +580,11 @@ impl MechanicsModel {
     /// the day's change of each spring, near-cancelling terms of the
     /// size of the springs (a residual of 6.6e-6 on the demo's first
     /// grouting day, against the 1e-8 a pass needs).
-    fn grouted_guess(&self, states: &[JointPointState], next: &NextStep) -> Vec<JointPointState> {
+    fn grouting_guess(&self, states: &[JointPointState], next: &NextStep) -> Vec<JointPointState> {
         let mut guess = states.to_vec();
-        for z in &next.grouting {
-            for (p, pt) in self.frame.points.iter().enumerate() {
-                let st = &mut guess[p];
-                if pt.joint == z.joint && pt.zone == z.zone && st.paired && st.grout.is_none() {
+        for &z in &next.grouting {
+            for (pt, st) in self.frame.points.iter().zip(guess.iter_mut()) {
+                if takes_grout(pt, st, z) {
                     st.state = PointState::Open;
                 }
             }
@@ -768,7 +768,7 @@ impl MechanicsModel {
                 == self.merged;
         let order = if same_merged {
             let (sys, birth) = (&self.sys, &self.state.birth_day);
-            let guess = self.grouted_guess(&self.state.joints, &next);
+            let guess = self.grouting_guess(&self.state.joints, &next);
             self.frame
                 .stiffness(sys, birth, t0, t1)
                 .ok()
@@ -809,7 +809,7 @@ impl MechanicsModel {
         let pair_live = self.pair_live(&live);
         let paired = self.newly_paired(&pair_live);
         // the step grouts before it pours (`Simulation::apply_mechanics_events`)
-        let mut states = self.grouted_guess(&self.state.joints, next);
+        let mut states = self.grouting_guess(&self.state.joints, next);
         for &(p, st) in &paired {
             states[p] = st;
         }
@@ -1392,9 +1392,13 @@ impl MechanicsModel {
     }
 }
 
-/// Whether the settings let a step be factorised ahead: the active set
-/// with the capacitance correction (which takes the rows that changed
-/// since), and `solver.factor_ahead`.
+/// Whether point `pt`, in state `st`, takes grout when `zone` is grouted:
+/// a live pair of the zone not grouted yet. [`MechanicsModel::grout`] and
+/// the guess of a grouting day's factor select the same points by it.
+fn takes_grout(pt: &JointPoint, st: &JointPointState, zone: ZoneId) -> bool {
+    pt.joint == zone.joint && pt.zone == zone.zone && st.paired && st.grout.is_none()
+}
+
 /// [`CondensedRock::condense`]'s y = A_RR⁻¹ b_R, when the rock is condensed.
 type Condensed = Option<Vec<f64>>;
 
@@ -1405,6 +1409,9 @@ struct Prescribed {
     condensed: Vec<(u32, f64)>,
 }
 
+/// Whether the settings let a step be factorised ahead: the active set
+/// with the capacitance correction (which takes the rows that changed
+/// since), and `solver.factor_ahead`.
 fn factor_ahead(settings: &MechanicsSettings) -> bool {
     let j = &settings.joint;
     settings.factor_ahead && j.capacitance && j.solver == crate::scene::ContactSolverKind::ActiveSet
