@@ -139,6 +139,28 @@ pub fn peak_memory_bytes() -> Option<u64> {
     proc_field("/proc/self/status", "VmHWM:").map(|kib| 1024 * kib)
 }
 
+/// The CPU time this process has used so far, user and system over all
+/// its threads [s] (`getrusage`): beside the wall time, how much of the
+/// cores a run kept busy (`groutready study perf`).
+pub fn cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        let mut ru = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+        // SAFETY: getrusage writes the struct it is given and nothing else.
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, ru.as_mut_ptr()) } != 0 {
+            return None;
+        }
+        // SAFETY: getrusage succeeded, so it filled the struct.
+        let ru = unsafe { ru.assume_init() };
+        let s = |t: libc::timeval| t.tv_sec as f64 + 1e-6 * t.tv_usec as f64;
+        Some(s(ru.ru_utime) + s(ru.ru_stime))
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
 /// The kB figure of the line starting with `key` in a `/proc` file.
 fn proc_field(path: &str, key: &str) -> Option<u64> {
     let text = std::fs::read_to_string(path).ok()?;
@@ -249,6 +271,22 @@ mod tests {
         if cfg!(target_os = "linux") {
             assert!(total_memory_bytes().is_some_and(|b| b > 1 << 28));
             assert!(peak_memory_bytes().is_some_and(|b| b > 0));
+        }
+    }
+
+    #[test]
+    fn cpu_time_grows_with_work() {
+        if cfg!(unix) {
+            let before = cpu_seconds().expect("getrusage");
+            let mut x = 0u64;
+            let t = std::time::Instant::now();
+            while t.elapsed().as_millis() < 50 {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            }
+            let after = cpu_seconds().expect("getrusage");
+            // 50 ms of spinning on this thread: most of it counted, never
+            // more than the wall time of every core
+            assert!(after - before > 0.02, "{before} -> {after}");
         }
     }
 }

@@ -343,7 +343,13 @@ impl Timed<'_> {
         let mesh = self.mesh;
         // a restored run counts from its checkpoint
         let (steps0, pours0) = sim.steps_and_pours();
+        let cpu0 = crate::machine::cpu_seconds();
         let mut stats = sim.run(None, &mut |_, _| {}).map_err(self.run_err(""))?;
+        let cores_note = cpu0
+            .zip(crate::machine::cpu_seconds())
+            .map_or(String::new(), |(a, b)| {
+                busy_cores_note(b - a, stats.seconds)
+            });
         stats.steps -= steps0;
         stats.pours -= pours0;
         let t = stats.thermal.unwrap_or_default();
@@ -364,7 +370,7 @@ impl Timed<'_> {
             t.seconds_assembly,
         );
         println!(
-            "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations{}",
+            "{:<22} inputs+mesh {:.2} s; {:.0} days simulated; largest live system {} dofs; {} PCG iterations{}{cores_note}",
             "", load_s, sim.day, t.max_dofs, t.pcg_iterations, peak_memory_note()
         );
         if let Some(m) = stats.mechanics {
@@ -427,6 +433,19 @@ impl Timed<'_> {
         }
         Ok(())
     }
+}
+
+/// "; C core-seconds, P % of the N cores over the wall time": the CPU time
+/// a run of `wall` seconds used, and the share of the machine's cores it
+/// kept busy. A run bound by its chain of factorisations shows it here:
+/// on 2 cores, a wall time of half its core-seconds is the most any
+/// overlap of its work can reach.
+fn busy_cores_note(core_seconds: f64, wall: f64) -> String {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!(
+        "; {core_seconds:.1} core-seconds, {:.0} % of the {cores} cores over the wall time",
+        100.0 * core_seconds / (wall * cores as f64).max(f64::MIN_POSITIVE)
+    )
 }
 
 /// "; peak memory N MiB" or nothing where the platform does not say.
