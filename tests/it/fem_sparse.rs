@@ -213,6 +213,69 @@ fn pattern_is_upper_sorted_and_scatter_maps_hit_the_right_entries() {
     }
 }
 
+/// A node's components share their elements, and the pattern takes the
+/// column before's rows for them: the pattern of a vector field (3 dofs a
+/// node, some components fixed, a dof no element touches, a repeated node)
+/// equals the one gathered column by column by brute force.
+#[test]
+fn vector_field_patterns_equal_brute_force_column_by_column() {
+    let mut rng = Rng(17);
+    let g = grid([3, 2, 2], 1.0, 0.2, true, &mut rng);
+    let n_nodes = g.n_dofs();
+    // node v's components 3v, 3v + 1, 3v + 2; every fifth node's z fixed
+    let dof = |v: u32, c: u32| {
+        if c == 2 && v.is_multiple_of(5) {
+            NO_DOF
+        } else {
+            3 * v + c
+        }
+    };
+    let mut slots: Vec<Vec<u32>> = (0..g.elems.len())
+        .map(|e| {
+            let nodes = g.hex_dofs(e);
+            nodes
+                .iter()
+                .flat_map(|&v| (0..3).map(move |c| dof(v, c)))
+                .collect()
+        })
+        .collect();
+    // a spring pair repeating one node (both ends on it), and one more dof
+    // (3 n_nodes) that no element touches
+    slots.push(vec![dof(4, 0), dof(4, 1), dof(4, 0), dof(4, 1)]);
+    let n = 3 * n_nodes + 1;
+    let p = Pattern::new(n, &slots);
+    let mut coupled = vec![std::collections::BTreeSet::new(); n];
+    for s in &slots {
+        for &a in s.iter().filter(|&&a| a != NO_DOF) {
+            for &b in s.iter().filter(|&&b| b != NO_DOF && b <= a) {
+                coupled[a as usize].insert(b);
+            }
+        }
+    }
+    for (j, rows) in coupled.iter_mut().enumerate() {
+        rows.insert(j as u32);
+        let got = &p.row_idx()[p.col_ptr()[j] as usize..p.col_ptr()[j + 1] as usize];
+        assert_eq!(got, rows.iter().copied().collect::<Vec<_>>(), "column {j}");
+    }
+    for (slot, dofs) in slots.iter().enumerate() {
+        let sc = p.scatter_index(slot);
+        let ne = dofs.len();
+        let mut idx = 0;
+        for a in 0..ne {
+            for b in a..ne {
+                let want = (dofs[a] != NO_DOF && dofs[b] != NO_DOF)
+                    .then(|| p.find(dofs[a] as usize, dofs[b] as usize).unwrap());
+                assert_eq!(
+                    (sc[idx] != u32::MAX).then_some(sc[idx] as usize),
+                    want,
+                    "slot {slot} ({a}, {b})"
+                );
+                idx += 1;
+            }
+        }
+    }
+}
+
 #[test]
 fn sparse_assembly_equals_dense_assembly() {
     let mut rng = Rng(5);
