@@ -357,12 +357,11 @@ pub fn body_force(coords: &[[f64; 3]; 8], b: [f64; 3]) -> Result<[f64; 24], Elem
     Ok(f)
 }
 
-/// [`body_force`] from cached Gauss points (same values: the 2×2×2 rule is
-/// exact for a uniform b).
+/// [`body_force`] from cached Gauss points, those of [`gauss_points`] in
+/// its order (same values: the 2×2×2 rule is exact for a uniform b).
 pub fn body_force_at(g: &[SolidGauss; 8], b: [f64; 3]) -> [f64; 24] {
     let mut f = [0.0; 24];
-    for gp in g {
-        let n = hex8::shape(gp.xi);
+    for (gp, n) in g.iter().zip(hex8::shape_at_gauss2()) {
         for a in 0..8 {
             for i in 0..3 {
                 f[3 * a + i] += b[i] * n[a] * gp.weight;

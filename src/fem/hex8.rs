@@ -45,6 +45,14 @@ pub fn shape(xi: [f64; 3]) -> [f64; 8] {
     n
 }
 
+/// N_a at the points of the 2×2×2 rule, `[g][a]` for ξ = [`GAUSS2_HEX`]`[g]`:
+/// [`shape`]'s numbers there, made once and read by every element and step
+/// (the mechanics' Gauss-point temperatures, each step's body forces).
+pub fn shape_at_gauss2() -> &'static [[f64; 8]; 8] {
+    static TABLE: std::sync::OnceLock<[[f64; 8]; 8]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| GAUSS2_HEX.map(shape))
+}
+
 /// Reference gradients ∂N_a/∂ξ_j.
 #[inline]
 pub fn shape_grad_ref(xi: [f64; 3]) -> [[f64; 3]; 8] {

@@ -592,15 +592,13 @@ impl MechanicsModel {
         guess
     }
 
-    /// Temperature at each Gauss point of element `e` from thermal-dof temperatures.
-    fn gauss_temperatures(&self, e: usize, temps: &[f64]) -> [f64; 8] {
-        let conn = &self.frame.elements[e];
-        std::array::from_fn(|g| {
-            let n = crate::fem::hex8::shape(self.frame.tables.gauss[e][g].xi);
-            (0..8)
-                .map(|k| n[k] * temps[self.frame.thermal_dof[conn[k] as usize] as usize])
-                .sum()
-        })
+    /// Temperature at each Gauss point of element `e` from thermal-dof
+    /// temperatures, before and after the step.
+    fn gauss_temperatures(&self, e: usize, before: &[f64], after: &[f64]) -> [[f64; 8]; 2] {
+        let dofs = self.frame.elements[e].map(|v| self.frame.thermal_dof[v as usize] as usize);
+        let n = crate::fem::hex8::shape_at_gauss2();
+        [before, after]
+            .map(|temps| std::array::from_fn(|g| (0..8).map(|k| n[g][k] * temps[dofs[k]]).sum()))
     }
 
     /// Hydrostatic load of the water at `level` on the live wet faces, per dof.
@@ -955,10 +953,7 @@ impl MechanicsModel {
             self.frame.settings.thermal_strain && self.frame.tables.alpha[e] != 0.0,
             temps,
         ) {
-            let (t_a, t_b) = (
-                self.gauss_temperatures(e, before),
-                self.gauss_temperatures(e, after),
-            );
+            let [t_a, t_b] = self.gauss_temperatures(e, before, after);
             for g in 0..8 {
                 volumetric[g] += self.frame.tables.alpha[e] * (t_b[g] - t_a[g]);
             }

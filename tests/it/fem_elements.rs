@@ -163,6 +163,22 @@ fn hex8_partition_of_unity_and_kronecker() {
     }
 }
 
+/// The table of N at the 2×2×2 rule's points is `shape` there, to the
+/// bit; each point's row sums to one and weighs its nearest node
+/// ((1 + 1/√3)/(1 − 1/√3))³ = (2 + √3)³ times the opposite one.
+#[test]
+fn hex8_shape_table_at_the_gauss_points_is_shape_there() {
+    let table = hex8::shape_at_gauss2();
+    let ratio = (2.0 + 3f64.sqrt()).powi(3);
+    for (g, xi) in groutready::fem::quadrature::GAUSS2_HEX.iter().enumerate() {
+        assert_eq!(table[g], hex8::shape(*xi), "point {g}");
+        assert!((table[g].iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        let near = table[g].iter().cloned().fold(f64::MIN, f64::max);
+        let far = table[g].iter().cloned().fold(f64::MAX, f64::min);
+        assert!((near / far - ratio).abs() < 1e-12 * ratio, "point {g}");
+    }
+}
+
 #[test]
 fn hex8_faces_match_the_contract() {
     assert_eq!(
