@@ -155,7 +155,7 @@ fn fast_paths_against_the_exact_path_at_the_grouting_dates() {
         "the correction replaces factorisations"
     );
     // a step whose start grouts zones starts from a factor made ahead too
-    // (its guess opens their points: `MechanicsModel::grouted_guess`); it
+    // (its guess opens their points: `MechanicsModel::grouting_guess`); it
     // factorised itself on every grouting date before
     let grouting_days: std::collections::BTreeSet<_> = dates.iter().map(|(_, d)| *d).collect();
     eprintln!(
