@@ -48,6 +48,18 @@ pub fn keep_freed_memory() {
     }
 }
 
+/// Lowers the calling thread's scheduling priority to the least (nice
+/// 19), so that it runs on the time the run's other threads leave idle.
+/// Linux sets the nice value per thread; elsewhere nothing changes.
+pub fn lower_this_threads_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: setpriority only changes the scheduling of the calling
+    // thread (`who` 0 under PRIO_PROCESS is the caller on Linux).
+    unsafe {
+        libc::setpriority(libc::PRIO_PROCESS, 0, 19);
+    }
+}
+
 /// Blocks of this size or more are mapped by glibc for themselves (the
 /// largest threshold `mallopt` takes on 64-bit Linux) [bytes].
 const MAPPED_FROM_BYTES: usize = 32 << 20;

@@ -182,6 +182,9 @@ pub struct NextStep {
     pub pours: Vec<(u32, u32)>,
     /// the zones grouted at its start
     pub grouting: Vec<ZoneId>,
+    /// the first day after its start that pours lifts, and those lifts
+    /// (their live set is analysed ahead: [`super::pours_ahead`])
+    pub later_pours: Option<(f64, Vec<(u32, u32)>)>,
 }
 
 /// The live system of a next step whose start pours lifts: numbered and
@@ -298,6 +301,12 @@ impl Order {
                 prepared,
             },
         }
+    }
+
+    /// Whether the next step pours lifts: its own live system is analysed
+    /// by the job.
+    pub fn pours(&self) -> bool {
+        matches!(self.work, Work::Births(_))
     }
 
     /// The order for the next step's factor over `interval` on its own live
@@ -466,6 +475,12 @@ impl FactorAhead {
     /// The step after the one about to run, or None when it is unknown.
     pub fn set_next(&mut self, next: Option<NextStep>) {
         self.next = next.filter(|_| self.enabled);
+    }
+
+    /// The step after the one about to run, as [`FactorAhead::set_next`]
+    /// named it (until its factorisation is [`FactorAhead::due`]).
+    pub fn next_step(&self) -> Option<&NextStep> {
+        self.next.as_ref()
     }
 
     /// Forgets everything made for the live system before a rebuild or a

@@ -43,6 +43,7 @@ pub mod joints;
 pub mod layer_merging;
 pub mod live;
 pub mod model;
+pub mod pours_ahead;
 pub mod rock_condensation;
 pub mod rock_ties;
 pub mod settings;

@@ -913,6 +913,7 @@ fn next_mechanical_step(
                 interval: (t1, t),
                 pours,
                 grouting,
+                later_pours: timeline.pours_after(t1),
             });
         }
     }

@@ -85,6 +85,19 @@ impl Timeline {
         self.days.get(&Day::containing(t))
     }
 
+    /// The first day strictly after time `t` (to the end) that pours lifts:
+    /// its time and the lifts (block, lift).
+    pub fn pours_after(&self, t: f64) -> Option<(f64, Vec<(u32, u32)>)> {
+        let next = Day::containing(t).plus(1);
+        if next > self.end_day {
+            return None;
+        }
+        self.days
+            .range(next..=self.end_day)
+            .find(|(_, ev)| !ev.pours.is_empty())
+            .map(|(&d, ev)| (d.t(), ev.pours.iter().map(|&(b, l, _)| (b, l)).collect()))
+    }
+
     /// The time of the first event day strictly after time `t`, or the end.
     pub fn next_event_after(&self, t: f64) -> f64 {
         let next = Day::containing(t).plus(1);
@@ -206,6 +219,37 @@ mod tests {
             }
             prev = e;
         }
+    }
+
+    /// The first pour day strictly after a time, skipping days of other
+    /// events, and none past the end.
+    #[test]
+    fn pours_after_finds_the_next_pour_day() {
+        let mut tl = Timeline {
+            end_day: Day(30),
+            ..Default::default()
+        };
+        let pours = |p: Vec<(u32, u32, f64)>| DayEvents {
+            pours: p,
+            ..Default::default()
+        };
+        tl.days.insert(Day(3), pours(vec![(0, 1, 12.0)]));
+        tl.days.insert(
+            Day(5),
+            DayEvents {
+                stage_change: true,
+                ..Default::default()
+            },
+        );
+        tl.days
+            .insert(Day(8), pours(vec![(1, 0, 12.0), (2, 4, 13.0)]));
+        tl.days.insert(Day(31), pours(vec![(3, 0, 12.0)]));
+        assert_eq!(tl.pours_after(0.0), Some((3.0, vec![(0, 1)])));
+        assert_eq!(tl.pours_after(2.5), Some((3.0, vec![(0, 1)])));
+        assert_eq!(tl.pours_after(3.0), Some((8.0, vec![(1, 0), (2, 4)])));
+        assert_eq!(tl.pours_after(8.0), None, "day 31 is past the end");
+        assert_eq!(tl.pours_after(30.0), None);
+        assert_eq!(tl.pours_after(45.0), None);
     }
 
     /// 0.1 d for 2 days, 0.25 d to day 7, then the ladder (capped at 1 d):

@@ -528,6 +528,11 @@ fn print_mechanics(m: &MechStats) {
         a.failed,
         a.seconds_waited
     );
+    let p = &m.pours_ahead;
+    println!(
+        "{:<22} live sets of coming pour days analysed ahead: {} started ({:.2} s on threads of their own), {} used, {} discarded",
+        "", p.started, p.seconds, p.used, p.discarded
+    );
 }
 
 fn solver_name(kind: ThermalSolverKind) -> &'static str {

@@ -135,6 +135,34 @@ fn the_next_live_set_is_the_same_on_either_thread() {
     assert_same_bits(&a, &b, "the placements");
 }
 
+/// The coming pour days' live systems analysed ahead on threads of their
+/// own (the default) or when their steps are ordered give the same bits;
+/// every analysis made ahead is taken by its pour day, but the last, held
+/// for a pour day after the shortened run's end.
+#[test]
+fn live_systems_analysed_ahead_change_no_bit() {
+    let inputs = inputs();
+    let run = |on| {
+        run_in_process(&inputs, |sim| {
+            sim.mechanics.as_mut().unwrap().set_pours_ahead(on)
+        })
+    };
+    let (a, b) = (run(true), run(false));
+    let ahead = |r: &(History, Vec<u8>, RunStats)| r.2.mechanics.unwrap().pours_ahead;
+    let (on, off) = (ahead(&a), ahead(&b));
+    assert!(
+        on.started > 1 && on.used + 1 == on.started && on.discarded == 0,
+        "analysed ahead: {on:?}"
+    );
+    assert_eq!(off.started, 0, "analysed ahead when off: {off:?}");
+    assert_eq!(
+        a.2.mechanics.unwrap().symbolic,
+        b.2.mechanics.unwrap().symbolic,
+        "live systems analysed"
+    );
+    assert_same_bits(&a, &b, "analysed ahead and not");
+}
+
 /// The thermal steps run beside the mechanical steps (the default) or in
 /// order on the run's thread give the same bits.
 #[test]
