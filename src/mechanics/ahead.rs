@@ -48,15 +48,17 @@
 //! when it was joined at the end of its step (waits 15.7 against 24–25 s).
 //!
 //! The next step's order ([`Order`]: its K̃, the matrix of its first pass
-//! and the guess) is made before the step waits for its own factor, and
-//! the job is started before the step's loads are assembled, so the other
-//! core waits for nothing but the swap of the solvers. With the order made
+//! and the guess) is made and its job started before the step waits for
+//! its own factor, so two factorisations may run at once while the step
+//! waits, and the cores never wait for an order. With the order made
 //! after the wait, the other core idled 21.8 s of the demo's 78.6 s
-//! between a factor and the next; the run now takes 74.1 against 80.2 s,
-//! the steps waiting 9.3 against 16.0 s (`study perf --quick`, alone on
-//! the 2 cores, 28 Nov 2026; the run folder the same to the byte). A step
-//! that pours lifts orders after its rebuild (the next live system is the
-//! one being factorised).
+//! between a factor and the next (28 Nov 2026); with the order made before
+//! the wait and the job started after it (the spare solver came free only
+//! then), 6.8 s of 52.3 s (a timeline of one run, 30 Nov 2026): each day
+//! the wake from the wait, the order and a thread's start. A step that
+//! pours lifts orders after its rebuild (the next live system is the one
+//! being factorised). Three solvers rotate: the step's, the one being
+//! made for the next step, and the one for the step after it.
 //!
 //! The factor is made only when the driver can name the next step
 //! ([`FactorAhead::set_next`]). When zones are grouted at its start, the
@@ -80,6 +82,7 @@
 //! Off (`solver.factor_ahead = false`) where the second core is busy: the
 //! planner's two remedy searches already run side by side.
 
+use std::collections::VecDeque;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
@@ -142,6 +145,10 @@ pub struct AheadStats {
     pub seconds_analysed: f64,
     /// time the step waited for a factorisation ahead to finish [s]
     pub seconds_waited: f64,
+    /// of those made, started while the one before was still running
+    /// (its step waiting for it): two at once
+    #[serde(default)]
+    pub started_beside: usize,
 }
 
 /// The factor being made or made for the next step, and its spare solver.
@@ -153,10 +160,12 @@ pub struct FactorAhead {
     next: Option<NextStep>,
     /// a solver on the live system's symbolic analysis, to factorise into
     spare: Option<CholeskySolver>,
-    /// the factorisation running on the other core: it outlives its step,
-    /// so it also overlaps the thermal steps and the commit before the
-    /// next mechanical step, which waits for it ([`FactorAhead::settle`])
-    running: Option<JoinHandle<Done>>,
+    /// the factorisations running, the next step's first: each outlives
+    /// the step that started it, so it also overlaps the thermal steps and
+    /// the commit before the step it is for, which waits for it
+    /// ([`FactorAhead::settle`]); a step starts the next step's before it
+    /// waits for its own, so two run at once while it waits
+    running: VecDeque<JoinHandle<Done>>,
     ready: Option<Made>,
     /// how long the last step waited for its factor made ahead [s]
     last_waited: f64,
@@ -167,7 +176,7 @@ pub struct FactorAhead {
 impl Drop for FactorAhead {
     /// A run that ends (or fails) with a factorisation running waits for it.
     fn drop(&mut self) {
-        if let Some(handle) = self.running.take() {
+        for handle in self.running.drain(..) {
             let _ = handle.join();
         }
     }
@@ -422,18 +431,20 @@ impl FactorAhead {
         ahead
     }
 
-    /// Starts `job` on the other core; the next [`FactorAhead::settle`]
-    /// waits for it.
+    /// Starts `job` on a thread of its own (beside one still running for
+    /// the step about to take it); the settles wait for them in order.
     pub fn start(&mut self, job: Job) {
-        debug_assert!(self.running.is_none(), "settled before a new job");
-        self.running = Some(job.spawn());
+        if !self.running.is_empty() {
+            self.stats.started_beside += 1;
+        }
+        self.running.push_back(job.spawn());
     }
 
-    /// Waits for the factorisation running, if any, and keeps it for its
-    /// step; returns the flops of the factor made, when one was. Every
+    /// Waits for the first factorisation running, if any, and keeps it for
+    /// its step; returns the flops of the factor made, when one was. Every
     /// use of what was made ahead settles first.
     pub fn settle(&mut self) -> Option<f64> {
-        let handle = self.running.take()?;
+        let handle = self.running.pop_front()?;
         let t = Instant::now();
         let done = handle
             .join()

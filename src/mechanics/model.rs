@@ -736,17 +736,20 @@ impl MechanicsModel {
             self.dirty = true;
         }
         let upcoming = self.ahead.next_step().cloned();
-        // The next step's order is made before this step waits for its own
-        // factor (still being made on the other core), so that the other
-        // core starts the next as soon as it is free: it idled 21.8 s of
-        // the demo's 78.6 s between a factor and the next when the order
-        // was made after the wait (28 Nov 2026). A rebuild pending makes
-        // it after the rebuild, on the new live system.
-        let early = if self.dirty || self.sys.pairs.is_empty() {
-            None
-        } else {
-            self.order_next()
-        };
+        // The next step's factorisation is ordered and started before this
+        // step waits for its own (still being made on the other core), so
+        // that a core never waits for an order: it idled 21.8 s of the
+        // demo's 78.6 s between a factor and the next when the order was
+        // made after the wait (28 Nov 2026), and 6.8 s of 52.3 s when the
+        // order was made before the wait but started after it (30 Nov). A
+        // rebuild pending orders it after the rebuild, on the new live
+        // system.
+        let early = !(self.dirty || self.sys.pairs.is_empty());
+        if early {
+            self.state.next_factor_guess = None;
+            let order = self.order_next();
+            self.start_next(order, upcoming.as_ref());
+        }
         // what was made ahead is this step's (or discarded by it)
         self.settle_ahead();
         if self.dirty {
@@ -800,28 +803,34 @@ impl MechanicsModel {
 
     /// This step's factor made ahead, if any (after a restore: made now
     /// from the guess the checkpoint carries; None: the step factorises),
-    /// and the next step's factorisation started on the other core from
-    /// this step's start states, when due ([`super::ahead`]): from `early`,
-    /// ordered before this step waited for its factor, or ordered now. The
-    /// first pour day after it that order does not analyse is then
-    /// analysed ahead, from `upcoming` (the next step as the driver named it).
+    /// and, unless it was started `early` (before this step waited for its
+    /// factor), the next step's factorisation started now from this step's
+    /// start states, when due ([`super::ahead`]); `upcoming` is the next
+    /// step as the driver named it.
     fn take_factor_start_next(
         &mut self,
         t0: f64,
         t1: f64,
         a: &SparseSym,
-        early: Option<Order>,
+        early: bool,
         upcoming: Option<&NextStep>,
     ) -> Result<Option<Prepared>, MechError> {
         let prepared = match self.ahead.take(t0, t1, &mut self.sys, a) {
             Some(p) => Some(p),
             None => self.factor_restored_guess(a, t0, t1)?,
         };
-        self.state.next_factor_guess = None;
-        let order = match early {
-            Some(order) => Some(order),
-            None => self.order_next(),
-        };
+        if !early {
+            self.state.next_factor_guess = None;
+            let order = self.order_next();
+            self.start_next(order, upcoming);
+        }
+        Ok(prepared)
+    }
+
+    /// Starts the factorisation of `order` on a thread of its own, and the
+    /// analysis of the first pour day's live system after it that the
+    /// order does not analyse, from `upcoming` ([`super::pours_ahead`]).
+    fn start_next(&mut self, order: Option<Order>, upcoming: Option<&NextStep>) {
         self.analyse_pours_ahead(upcoming, order.as_ref().is_some_and(Order::pours));
         match order.map(|o| self.ahead.job(o, &self.sys)) {
             Some(Ok(job)) => {
@@ -833,7 +842,6 @@ impl MechanicsModel {
             Some(Err(_)) => self.ahead.not_made(),
             None => {}
         }
-        Ok(prepared)
     }
 
     /// The next step's order when its factorisation is due: its K̃ on this

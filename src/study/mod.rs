@@ -517,10 +517,11 @@ fn print_mechanics(m: &MechStats) {
     );
     let a = &m.ahead;
     println!(
-        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} on a live set analysed ahead; {:.2} s of analyses on threads of their own), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
+        "{:<22} factorised ahead on the second core: {} made ({:.2} s; {} started while the one before ran; {} on a live set analysed ahead; {:.2} s of analyses on threads of their own), {} used, {} discarded, {} failed; steps waited {:.2} s for them",
         "",
         a.made,
         a.seconds,
+        a.started_beside,
         a.on_new_systems,
         a.seconds_analysed,
         a.used,
