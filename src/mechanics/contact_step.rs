@@ -161,9 +161,24 @@ const NORMAL_SETTLED_FACTOR: f64 = 1e7;
 /// the Xiaowan-like complete dam, against 17.7 and 49 Gflop/s of
 /// factorisation; a weight of 2 changed nothing on the demo's whole
 /// construction and made its complete-dam step slower (2.84 against
-/// 2.40 s: larger corrections need more refinements), so it stays.
-/// `groutready study perf` prints what both cost.
-const CAPACITANCE_SOLVE_WEIGHT: f64 = 5.5;
+/// 2.40 s: larger corrections need more refinements), so 5.5 stayed. With
+/// the columns batched in the factor's order and the products of S block
+/// by block (29 Nov 2026), 3 — the rates' ratio on the large arch — keeps
+/// the large arch's late days from refactorising past a break-even they
+/// had not reached: days 856–862 (`study perf --resume`, 6 steps, 79
+/// passes) 6 factorisations against 9, 28.4 against 41.9 s, the joints
+/// 56.9 against 55.7 s, the steps 91.5 against 104.4 s (and 123.3
+/// against 125.8 s for the whole command in a first pair); the demo's run
+/// 0 refactorisations past it against 2, its complete dam's step the
+/// same 10 (30 Nov 2026). `groutready study perf` prints what both cost.
+const CAPACITANCE_SOLVE_WEIGHT: f64 = 3.0;
+/// The same weight in the choice to solve the slip forces with the states
+/// (a border of the system, [`crate::fem::Coupling`]): its columns' cost
+/// against a factorisation's. Kept at the 5.5 of the break-even before
+/// (30 Nov 2026): at 3 the demo's complete dam under its weight at once
+/// couples sooner and takes 73 passes against 66 (2.50 against 1.97 s);
+/// the large arch's days 856–862 couple alike at either.
+const COUPLING_SOLVE_WEIGHT: f64 = 5.5;
 /// Memory the capacitance columns of one step may hold [bytes]; above it
 /// the step refactorises.
 const CAPACITANCE_MAX_BYTES: usize = 1 << 30;
@@ -908,7 +923,7 @@ impl ActiveSet {
                 flops + 2.0 * rows as f64 * 3.0 * k
             })
             .sum();
-        let direct = border_flops * CAPACITANCE_SOLVE_WEIGHT + 2.0 / 3.0 * k.powi(3)
+        let direct = border_flops * COUPLING_SOLVE_WEIGHT + 2.0 / 3.0 * k.powi(3)
             <= live.solver.factor_flops();
         let (presc, rhs, couplings) = self.pass_loads(sys, live, trial, direct);
         let Some((factored_springs, cap)) = self.factored.as_mut() else {
