@@ -548,6 +548,7 @@ impl MechanicsModel {
     /// step that no order of this step analyses ([`super::pours_ahead`]):
     /// the next step's, unless its factor made ahead analyses it
     /// (`births_ordered`), then the following pour day's.
+    ///
     /// Not where the live system factorises on both cores (as for the
     /// factor made ahead): on the Xiaowan-like arch's days 856–862 the
     /// analyses ahead took 1.9 s off the steps' 100 s and added 0.7 GB to
@@ -587,10 +588,10 @@ impl MechanicsModel {
         }
         let pair_live = self.pair_live(&live);
         let frame = Arc::clone(&self.frame);
-        let key = (live.clone(), merged.clone());
-        self.pours_ahead.start(key.0, key.1, move || {
-            frame.live_system(&live, &pair_live, &merged)
-        });
+        self.pours_ahead
+            .start(live.clone(), merged.clone(), move || {
+                frame.live_system(&live, &pair_live, &merged)
+            });
     }
 
     /// Numbers and analyses the live system of the elements `live`, counted.
@@ -759,8 +760,8 @@ impl MechanicsModel {
         let t_asm = Instant::now();
         let k = self.step_stiffness(t0, t1)?;
         self.stats.seconds_assembly += t_asm.elapsed().as_secs_f64();
-        // this step's factor taken and the next one's started before the
-        // loads are assembled: the other core waits for the order alone
+        // this step's factor taken (and the next one's started, when not
+        // early) before the loads are assembled
         let prepared = if self.sys.pairs.is_empty() {
             self.analyse_pours_ahead(upcoming.as_ref(), false);
             None
