@@ -156,6 +156,27 @@ impl Frame {
         Ok((frame, costs))
     }
 
+    /// Marks the elements of `lifts` (block, lift) live in `live` and born
+    /// on `day` in `birth`; whether the lifts have any element.
+    pub(super) fn pour(
+        &self,
+        lifts: &[(u32, u32)],
+        day: f64,
+        live: &mut [bool],
+        birth: &mut [f64],
+    ) -> bool {
+        let mut any = false;
+        for &e in lifts
+            .iter()
+            .flat_map(|key| self.lift_elems.get(key).into_iter().flatten())
+        {
+            live[e as usize] = true;
+            birth[e as usize] = day;
+            any = true;
+        }
+        any
+    }
+
     /// Creep terms per Gauss point of a concrete element (0 without the
     /// `creep` effect).
     pub(super) fn creep_terms(&self) -> usize {

@@ -419,8 +419,7 @@ impl MechanicsModel {
         self.settle_ahead();
         self.ahead
             .set_enabled(on && factor_ahead(&self.frame.settings));
-        self.pours_ahead
-            .set_enabled(on && factor_ahead(&self.frame.settings));
+        self.set_pours_ahead(on);
     }
 
     /// Analyse the coming pour days' live systems ahead, on threads of their
@@ -457,11 +456,11 @@ impl MechanicsModel {
 
     /// Pours lift `lift` of `block` on `day`: its elements are born stress-free.
     pub fn pour(&mut self, block: u32, lift: u32, day: f64) {
-        if let Some(elems) = self.frame.lift_elems.get(&(block, lift)) {
-            for &e in elems {
-                self.state.live[e as usize] = true;
-                self.state.birth_day[e as usize] = day;
-            }
+        let state = &mut self.state;
+        if self
+            .frame
+            .pour(&[(block, lift)], day, &mut state.live, &mut state.birth_day)
+        {
             self.dirty = true;
         }
     }
@@ -560,21 +559,13 @@ impl MechanicsModel {
         };
         let mut live = self.state.live.clone();
         let mut birth = self.state.birth_day.clone();
-        let mut pour = |lifts: &[(u32, u32)], day: f64| {
-            for key in lifts {
-                for &e in self.frame.lift_elems.get(key).into_iter().flatten() {
-                    live[e as usize] = true;
-                    birth[e as usize] = day;
-                }
-            }
-        };
         let t1 = next.interval.0;
-        pour(&next.pours, t1);
+        self.frame.pour(&next.pours, t1, &mut live, &mut birth);
         let day = if next.pours.is_empty() || births_ordered {
             let Some((day, lifts)) = &next.later_pours else {
                 return;
             };
-            pour(lifts, *day);
+            self.frame.pour(lifts, *day, &mut live, &mut birth);
             *day
         } else {
             t1
@@ -892,12 +883,7 @@ impl MechanicsModel {
         let (t0, t1) = next.interval;
         let mut live = self.state.live.clone();
         let mut birth = self.state.birth_day.clone();
-        for key in &next.pours {
-            for &e in self.frame.lift_elems.get(key).into_iter().flatten() {
-                live[e as usize] = true;
-                birth[e as usize] = t0;
-            }
-        }
+        self.frame.pour(&next.pours, t0, &mut live, &mut birth);
         let merged = self.frame.merge.tied_at(&live, &birth, t0);
         if live == self.state.live && merged == self.merged {
             return None;
