@@ -685,12 +685,11 @@ struct ActiveSet {
     /// the grout springs of the factor in `live` and the correction of
     /// its constrained rows and springs to the current guess's
     factored: Option<(Vec<bool>, Capacitance)>,
-    /// the grout springs of the current guess (per live pair), once known
-    springs: Option<Vec<bool>>,
+    /// the grout springs of the current guess (per live pair): those of
+    /// `a_cur`
+    springs: Vec<bool>,
     /// K̃ with the springs of the current guess, before its Dirichlet rows
     a_cur: SparseSym,
-    /// the factored matrix
-    m: SparseSym,
     /// correct a changed set of constrained rows instead of refactorising
     capacitance: bool,
     /// the slip forces' fixed-point residual after the last pass, in
@@ -813,6 +812,7 @@ impl ActiveSet {
             .map(|p| old[p.point as usize].state == PointState::Slip)
             .collect();
         trial.work = first_guess(live, old);
+        let (_, springs) = guess_rows(live, &trial.work);
         let f_scale = force_scale(sys.b, live, old);
         let slip_force = live
             .pairs
@@ -849,15 +849,14 @@ impl ActiveSet {
             frictionless: s.mu_static == 0.0,
             anderson: Anderson::new(ANDERSON_DEPTH),
             factored: None,
-            springs: None,
-            a_cur: SparseSym::new(sys.a.pattern().clone()),
-            m: SparseSym::new(sys.a.pattern().clone()),
+            a_cur: with_springs(sys.a, live, &trial.work),
+            springs,
             capacitance: s.capacitance,
             slip_residual: f64::INFINITY,
         };
+        // the prepared matrix was factorised already: not kept
         if let Some(p) = prepared {
             it.factored = Some((p.springs, Capacitance::with_diagonal(p.fixed, p.base_diag)));
-            it.m = p.m;
         }
         it
     }
@@ -877,7 +876,6 @@ impl ActiveSet {
     ) -> Self {
         let mut it = ActiveSet::start(sys, live, s, trial, None);
         it.factored = self.factored.take();
-        it.m = self.m;
         it.may_pivot = false;
         it
     }
@@ -931,7 +929,7 @@ impl ActiveSet {
         };
         if couplings.is_empty()
             && cap.base() == fixed.as_slice()
-            && self.springs.as_ref() == Some(factored_springs)
+            && &self.springs == factored_springs
         {
             let sol = solve_held(live, &self.a_cur, &fixed, &presc, &rhs, &mut trial.out)?;
             return Ok((sol, false));
@@ -988,20 +986,20 @@ impl ActiveSet {
         fixed: &[bool],
         springs: Vec<bool>,
     ) -> Result<(), JointStepError> {
-        if self.springs.as_deref() != Some(springs.as_slice()) {
+        if self.springs != springs {
             // the matrix of this pass: the factor's, or the one the
             // correction solves (springs as a diagonal change)
             self.a_cur = with_springs(sys.a, live, &trial.work);
-            self.springs = Some(springs);
+            self.springs = springs;
         }
         if let Some(reason) = self.refactor_reason(live, fixed) {
-            self.m = self.a_cur.clone();
-            self.m.apply_dirichlet(fixed);
-            factorize(live, &self.m, &mut trial.out)?;
+            let mut m = self.a_cur.clone();
+            m.apply_dirichlet(fixed);
+            factorize(live, &m, &mut trial.out)?;
             trial.out.refactor_reasons.count(reason);
             let base_diag = self.a_cur.diag();
             self.factored = Some((
-                self.springs.clone().unwrap_or_default(),
+                self.springs.clone(),
                 Capacitance::with_diagonal(fixed.to_vec(), base_diag),
             ));
         }
@@ -1080,7 +1078,7 @@ impl ActiveSet {
         let Some((factored_springs, cap)) = &self.factored else {
             return Some(RefactorReason::Step);
         };
-        let same_springs = self.springs.as_ref() == Some(factored_springs);
+        let same_springs = &self.springs == factored_springs;
         if cap.base() == fixed && same_springs {
             return None;
         }
