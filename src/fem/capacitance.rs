@@ -442,15 +442,18 @@ impl EquilibratedLu {
         }
     }
 
-    /// r ← S⁻¹ r.
+    /// r ← S⁻¹ r, every column of r.
     fn solve_in_place(&self, mut r: faer::MatMut<'_, f64>) {
-        for (i, &d) in self.scale.iter().enumerate() {
-            r[(i, 0)] *= d;
-        }
+        let scale_rows = |r: &mut faer::MatMut<'_, f64>| {
+            for j in 0..r.ncols() {
+                for (i, &d) in self.scale.iter().enumerate() {
+                    r[(i, j)] *= d;
+                }
+            }
+        };
+        scale_rows(&mut r);
         self.lu.solve_in_place(r.as_mut());
-        for (i, &d) in self.scale.iter().enumerate() {
-            r[(i, 0)] *= d;
-        }
+        scale_rows(&mut r);
     }
 }
 
