@@ -23,9 +23,13 @@
 //! The loop then goes on at d' as if its thermal steps had just been taken.
 //! Only the order of independent work changes, so the answer is the same
 //! to the bit (`tests/it/reproducible.rs` compares a run with and without).
-//! A day with a checkpoint or a snapshot, which hold both models at d, runs
-//! in order, as does a run told its second core is busy
-//! ([`Simulation::set_factor_ahead`]).
+//! A day with a checkpoint runs beside too: the run's thread takes the
+//! thermal half of the checkpoint at d before d's events, as the run in
+//! order takes it, and the mechanical half is added once the step has
+//! joined, before d's mechanical events (the same bytes:
+//! `tests/it/reproducible.rs`). A day with a snapshot, which holds both
+//! models' fields after d's events, runs in order, as does a run told its
+//! second core is busy ([`Simulation::set_factor_ahead`]).
 //!
 //! The demo's whole construction on 2 cores (28 Nov 2026, the binaries
 //! alternated three times): 92.9–94.4 s against 98.5–101.8 s in order. Its
@@ -38,7 +42,7 @@ use crate::thermal::ThermalRewind;
 use crate::vocab::Day;
 
 use super::timeline::Ladder;
-use super::{SimError, Simulation, StopWhen};
+use super::{Checkpoint, SimError, Simulation, StopWhen};
 
 /// The run as it stood at the midnight its thermal model stepped on from.
 struct Rewind {
@@ -55,18 +59,19 @@ struct Ahead {
     sites: Option<Vec<f64>>,
     /// the error of a thermal step after d, reported only if the run goes on
     thermal: Result<(), SimError>,
+    /// d's checkpoint, when one is due, but for its mechanical state (the
+    /// step is still running when it is taken)
+    checkpoint: Option<Checkpoint>,
 }
 
 impl Simulation<'_> {
     /// The mechanical model, taken out of the run, when the step ending now
     /// may run beside the next day's thermal steps: the second core is the
-    /// run's, both models exist, and this day has no checkpoint or
-    /// snapshot.
+    /// run's, both models exist, and this day has no snapshot.
     pub(super) fn take_for_beside(&mut self, end: f64) -> Option<MechanicsModel> {
         let fits = self.thermal_beside
             && self.thermal.is_some()
             && self.day < end
-            && !self.checkpoint_due()
             && !self.timeline.at(self.day).is_some_and(|e| e.snapshot);
         fits.then(|| self.mechanics.take()).flatten()
     }
@@ -107,7 +112,13 @@ impl Simulation<'_> {
             mut rewind,
             sites,
             thermal,
+            checkpoint,
         } = ahead?;
+        if let Some(mut ck) = checkpoint {
+            // the model as the step left it, before d's mechanical events
+            ck.mechanics = self.mechanics.as_ref().map(|m| m.state.clone());
+            self.keep_checkpoint(ck);
+        }
         if let Some(events) = self.timeline.at(day).cloned() {
             self.apply_mechanics_events(day, &events.grouting, &events.pours);
         }
@@ -127,11 +138,14 @@ impl Simulation<'_> {
     }
 
     /// The run's thread while a mechanical step runs (the mechanical model
-    /// is out): the ladder's growth at this midnight, the day's events
-    /// (their thermal part), the next mechanical step's start, the day's
-    /// temperature rows, then the thermal steps to the next midnight.
+    /// is out): the ladder's growth at this midnight, the checkpoint due at
+    /// it (but for its mechanical state), the day's events (their thermal
+    /// part), the next mechanical step's start, the day's temperature rows,
+    /// then the thermal steps to the next midnight.
     fn thermal_to_next_midnight(&mut self, end: f64) -> Result<Ahead, SimError> {
         self.ladder.grow(&self.scene.time);
+        // the mechanical model is out: its part is added after the join
+        let checkpoint = self.checkpoint_due().then(|| self.checkpoint());
         self.apply_events(None)?;
         self.mark_mechanical_start();
         let sites = self.record_temperatures();
@@ -146,6 +160,7 @@ impl Simulation<'_> {
             rewind,
             sites,
             thermal,
+            checkpoint,
         })
     }
 

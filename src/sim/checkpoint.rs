@@ -212,11 +212,18 @@ impl Simulation<'_> {
 
     pub(super) fn maybe_checkpoint(&mut self) {
         if self.checkpoint_due() {
-            if let Some(from) = self.checkpoints_kept_from {
-                self.checkpoints.retain(|c| c.day >= from);
-            }
-            self.checkpoints.push(self.checkpoint());
+            let ck = self.checkpoint();
+            self.keep_checkpoint(ck);
         }
+    }
+
+    /// Adds `ck` to the checkpoints kept, dropping those before
+    /// `checkpoints_kept_from`.
+    pub(super) fn keep_checkpoint(&mut self, ck: Checkpoint) {
+        if let Some(from) = self.checkpoints_kept_from {
+            self.checkpoints.retain(|c| c.day >= from);
+        }
+        self.checkpoints.push(ck);
     }
 
     /// Is a checkpoint due at the current day?

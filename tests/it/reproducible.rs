@@ -42,7 +42,7 @@ fn run_in_process(
     let end = inputs.scene.epoch.day(END_DATE.parse().unwrap());
     sim.set_end_day(end);
     let stats = sim.run(None, &mut |_, _| {}).unwrap();
-    let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint())).unwrap();
+    let bits = postcard::to_stdvec(&(sim.history(), sim.checkpoint(), &sim.checkpoints)).unwrap();
     (sim.history(), bits, stats)
 }
 
@@ -164,16 +164,31 @@ fn live_systems_analysed_ahead_change_no_bit() {
 }
 
 /// The thermal steps run beside the mechanical steps (the default) or in
-/// order on the run's thread give the same bits.
+/// order on the run's thread give the same bits, and the same checkpoints:
+/// a checkpoint day runs beside too, its thermal half taken before the
+/// day's events and its mechanical half after the join (every third day
+/// here, so that checkpoint days with pours and groutings occur).
 #[test]
 fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
     let inputs = inputs();
-    let run = |beside| run_in_process(&inputs, |sim| sim.set_thermal_beside(beside));
+    let run = |beside| {
+        run_in_process(&inputs, |sim| {
+            sim.set_thermal_beside(beside);
+            sim.checkpoint_every = Some(3);
+        })
+    };
     let (a, b) = (run(true), run(false));
     let (beside_on, beside_off) = (a.2.mechanical_steps_beside, b.2.mechanical_steps_beside);
     assert!(
         beside_on > 0 && beside_off == 0,
         "mechanical steps beside the thermal steps: {beside_on} when on, {beside_off} when off"
+    );
+    // every step but the last (none follows it) and those of snapshot days
+    let snapshot_days = inputs.scene.output.snapshots.len();
+    let steps = a.2.mechanics.as_ref().unwrap().steps;
+    assert!(
+        beside_on + 1 + snapshot_days >= steps,
+        "{beside_on} of {steps} mechanical steps ran beside (checkpoint days in order?)"
     );
     assert_eq!(a.2.steps, b.2.steps, "thermal steps");
     assert_same_bits(&a, &b, "beside and in order");
