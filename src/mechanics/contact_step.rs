@@ -224,6 +224,10 @@ pub struct JointStepOutcome {
     pub x: Vec<f64>,
     /// passes (active set) or cone-program fixed-point iterations (qp)
     pub iterations: usize,
+    /// of the passes, those that changed no state and moved only the slip
+    /// forces the pass did not solve with the states (a step of Anderson
+    /// mixing of their fixed point, [`ActiveSet::next_slip_forces`])
+    pub slip_force_passes: usize,
     pub factorizations: usize,
     pub solves: usize,
     pub seconds_numeric: f64,
@@ -1451,6 +1455,7 @@ impl ActiveSet {
             for (i, &q) in slipping.iter().enumerate() {
                 self.slip_force[q] = [next[2 * i], next[2 * i + 1]];
             }
+            trial.out.slip_force_passes += 1;
             Some(changes)
         }
     }

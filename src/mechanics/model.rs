@@ -137,6 +137,10 @@ pub struct MechStats {
     pub seconds_joints: f64,
     /// contact iterations (active-set passes or cone-program solves)
     pub contact_iterations: usize,
+    /// of the active-set passes, those that moved only slip forces (the
+    /// fixed point of the slipping points not solved with the states)
+    #[serde(default)]
+    pub slip_force_passes: usize,
     /// largest tension [Pa] left on a joint point kept closed by the flip limit
     pub kept_closed_tension: f64,
     /// steps whose normal contact states switched by block pivoting
@@ -1187,6 +1191,7 @@ impl MechanicsModel {
         self.stats
             .count_numeric(out.factorizations, flops, out.seconds_numeric);
         self.stats.contact_iterations += out.iterations;
+        self.stats.slip_force_passes += out.slip_force_passes;
         self.stats.kept_closed_tension =
             self.stats.kept_closed_tension.max(out.kept_closed_tension);
         self.stats.block_pivoting_steps += usize::from(out.block_pivoting);

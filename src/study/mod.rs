@@ -460,7 +460,7 @@ fn peak_memory_note() -> String {
 fn print_mechanics(m: &MechStats) {
     let r = &m.refactor_reasons;
     println!(
-        "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, {} steps pivoting in blocks, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
+        "{:<22} mechanics: {} steps, largest {} dofs, {} symbolic ({:.2} s) + {} numeric ({:.2} s) factorisations, solve {:.2} s, assembly {:.2} s, joints {:.2} s ({} contact passes, {} of them moving slip forces only, {} steps pivoting in blocks, largest tension kept closed {:.2e} Pa); {:.1} ms/step",
         "",
         m.steps,
         m.max_dofs,
@@ -472,6 +472,7 @@ fn print_mechanics(m: &MechStats) {
         m.seconds_assembly,
         m.seconds_joints,
         m.contact_iterations,
+        m.slip_force_passes,
         m.block_pivoting_steps,
         m.kept_closed_tension,
         1e3 * (m.seconds_symbolic + m.seconds_numeric + m.seconds_solve + m.seconds_assembly + m.seconds_joints)
