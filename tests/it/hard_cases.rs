@@ -1789,9 +1789,10 @@ fn the_complete_dam_with_friction_loaded_at_once() {
         h.assert_stable(&format!("the dam with friction at once ({loads:?})"));
         assert!(h.open > 0 && h.closed > 0, "the joints open and close");
         assert!(passes <= 200, "{passes} passes");
-        // its 1,552 points slip too many for the border alone: most passes
-        // move only the slip forces' fixed point (42 of 66 under its weight,
-        // 5 Dec 2026), the others change states
+        // its slipping points are too many for the border that solves
+        // them with the states: most passes move only the slip forces'
+        // fixed point (42 of 66 under its weight, 5 Dec 2026), the others
+        // change states
         let slip_only = once.stats.slip_force_passes;
         assert!(
             slip_only > 0 && slip_only < passes,
