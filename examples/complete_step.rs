@@ -1,15 +1,25 @@
 //! The complete dam loaded at once (every lift born, every joint closed,
 //! self-weight): the hard contact step of `groutready study perf`, with its
-//! counters and the joint states it ends in.
+//! counters and the joint states it ends in; `--passes` prints its contact
+//! passes one by one (`mechanics::contact_step::PassRecord`).
 //!
-//!     cargo run --release --example complete_step [SCENE]
+//!     cargo run --release --example complete_step [SCENE] [--passes]
+
+use groutready::mechanics::contact_step::PassRecord;
 
 fn main() -> anyhow::Result<()> {
-    let path = std::env::args()
-        .nth(1)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let passes = args.iter().any(|a| a == "--passes");
+    let path = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .cloned()
         .unwrap_or("models/demo_arch.toml".into());
     let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
     let cost = groutready::study::full_dam_mechanics_step_cost(&inputs.scene, &inputs.mesh)?;
+    if passes {
+        print_passes(&cost.passes);
+    }
     let s = &cost.stats;
     println!(
         "{} dofs, {} pairs: step {:.2} s, {} numeric factorisations, {} passes ({} of them moving slip forces only), largest tension kept closed {:.3e} Pa",
@@ -38,4 +48,25 @@ fn main() -> anyhow::Result<()> {
         c.max_rank
     );
     Ok(())
+}
+
+/// One line per contact pass.
+fn print_passes(passes: &[PassRecord]) {
+    println!("pass  kind        changes   open  stick   slip  factor   rank coupled  slip residual  wrong");
+    for (i, p) in passes.iter().enumerate() {
+        println!(
+            "{:4}  {:<10} {:8} {:6} {:6} {:6}  {:6} {:6} {:7}  {:13.3e}  {}",
+            i + 1,
+            format!("{:?}", p.kind),
+            p.changes,
+            p.open,
+            p.stick,
+            p.slip,
+            if p.factorised { "yes" } else { "" },
+            p.rank,
+            p.couplings,
+            p.slip_residual,
+            p.wrong_normal.map_or(String::new(), |w| w.to_string()),
+        );
+    }
 }

@@ -254,6 +254,9 @@ pub struct Corrected {
     /// included): the residual's product, which a caller reading reactions
     /// off the solution need not compute again
     pub ax: Vec<f64>,
+    /// rows of the capacitance system: the changed rows, then the couplings
+    pub rank: usize,
+    pub couplings: usize,
 }
 
 /// A load proportional to a row of A x: each row `t` of `loads` (free in
@@ -683,6 +686,8 @@ impl Capacitance {
             residual,
             residual_norm: norm,
             ax,
+            rank: border.changes.len(),
+            couplings: border.couplings.len(),
         })
     }
 

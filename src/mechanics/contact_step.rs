@@ -239,6 +239,55 @@ pub struct JointStepOutcome {
     pub refactor_reasons: RefactorCounts,
     /// the capacitance corrections that replaced factorisations
     pub capacitance: CapacitanceStats,
+    /// the active set's passes, one record each
+    pub passes: Vec<PassRecord>,
+}
+
+/// One contact pass of the active set, as [`JointStepOutcome::passes`]
+/// logs it: how a hard step's passes go (rounds of state switches, each
+/// followed by passes of the slip forces' fixed point), which
+/// `examples/complete_step.rs --passes` prints.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassRecord {
+    pub kind: PassKind,
+    /// points whose state the pass changed for the next one
+    /// ([`PassKind::Switched`]) or whose normal state [`BlockPivoting`]
+    /// held for it ([`PassKind::Settled`]); 0 otherwise
+    pub changes: usize,
+    /// live points open, sticking and slipping after the pass
+    pub open: usize,
+    pub stick: usize,
+    pub slip: usize,
+    /// the pass factorised (the step's first factor, or rows changed past
+    /// the correction's break-even)
+    pub factorised: bool,
+    /// rows of the pass's capacitance correction: rows changed from its
+    /// factor's, and slip forces coupled to their normal reactions (both 0:
+    /// solved on its factor alone)
+    pub rank: usize,
+    pub couplings: usize,
+    /// the slip forces' fixed-point residual after the pass, in
+    /// [`ActiveSet::friction_tolerance`]s (infinite after a change of
+    /// states)
+    pub slip_residual: f64,
+    /// normal states [`BlockPivoting`] found wrong in its last switching
+    /// pass (None before it has switched)
+    pub wrong_normal: Option<usize>,
+}
+
+/// What a contact pass did ([`PassRecord`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PassKind {
+    /// states changed: switches, sticks, a grout layer cracked
+    Switched,
+    /// no state changed: a step of Anderson mixing moved the slip forces
+    /// not solved with the states
+    SlipForces,
+    /// the friction holds on the states; the normal states
+    /// [`BlockPivoting`] held switch in the next pass
+    Settled,
+    /// the step's answer
+    Answer,
 }
 
 /// Why the joint solve factorised.
@@ -610,6 +659,7 @@ fn active_set(
     let mut last_changes = 0;
     for pass in 1..=s.max_iterations {
         trial.out.iterations = pass;
+        let factorised_before = trial.out.factorizations;
         if it.pivoting.is_some_and(|b| b.last_wrong > 0) && pass > s.max_iterations / 2 {
             it = it.restart_without_pivoting(sys, live, s, trial);
         }
@@ -622,8 +672,10 @@ fn active_set(
             let mut outcome = it.correct_states(sys, live, s, trial, &sol);
             outcome.changes += crack(live, sys.points, &mut trial.work, s.bond_strength, sys.day);
             match it.next_slip_forces(live, trial, outcome) {
-                Some(changes) => {
+                Some((kind, changes)) => {
                     last_changes = changes;
+                    let record = it.record(live, trial, kind, changes, factorised_before);
+                    trial.out.passes.push(record);
                     break;
                 }
                 // the states hold: the same system refined to the answer's
@@ -638,6 +690,8 @@ fn active_set(
                 }
                 None => {
                     it.record_kept_closed(sys, live, trial);
+                    let record = it.record(live, trial, PassKind::Answer, 0, factorised_before);
+                    trial.out.passes.push(record);
                     return Ok(sol.x);
                 }
             }
@@ -696,6 +750,9 @@ struct ActiveSet {
     a_cur: SparseSym,
     /// correct a changed set of constrained rows instead of refactorising
     capacitance: bool,
+    /// rank and couplings of the last pass's correction
+    /// ([`PassRecord::rank`])
+    last_correction: (usize, usize),
     /// the slip forces' fixed-point residual after the last pass, in
     /// [`ActiveSet::friction_tolerance`]s (infinite after a change of
     /// states)
@@ -856,6 +913,7 @@ impl ActiveSet {
             a_cur: with_springs(sys.a, live, &trial.work),
             springs,
             capacitance: s.capacitance,
+            last_correction: (0, 0),
             slip_residual: f64::INFINITY,
         };
         // the prepared matrix was factorised already: not kept
@@ -936,6 +994,7 @@ impl ActiveSet {
             && &self.springs == factored_springs
         {
             let sol = solve_held(live, &self.a_cur, &fixed, &presc, &rhs, &mut trial.out)?;
+            self.last_correction = (0, 0);
             return Ok((sol, false));
         }
         let before = cap.stats;
@@ -951,6 +1010,7 @@ impl ActiveSet {
         )?;
         trial.out.capacitance.add(&cap.stats.since(&before));
         trial.out.solves += 1;
+        self.last_correction = (corrected.rank, corrected.couplings);
         // the residual on the system of this pass's rows, as a fresh factor's
         // (the correction's last refinement measured it)
         let x = accept(
@@ -1381,15 +1441,15 @@ impl ActiveSet {
 
     /// After a pass: restarts the slip-force iteration on new states,
     /// sticks the reversed points once the slip forces have settled, or
-    /// advances the slip forces by Anderson mixing. Returns the state
-    /// changes to report if the step does not converge, or `None` when it
-    /// has converged.
+    /// advances the slip forces by Anderson mixing. Returns what the pass
+    /// was and the state changes to report if the step does not converge,
+    /// or `None` when it has converged.
     fn next_slip_forces(
         &mut self,
         live: &LiveSystem,
         trial: &mut Trial,
         outcome: PassOutcome,
-    ) -> Option<usize> {
+    ) -> Option<(PassKind, usize)> {
         let PassOutcome {
             changes,
             mapped,
@@ -1419,7 +1479,7 @@ impl ActiveSet {
             for &q in &slipping {
                 self.slip_force[q] = mapped[q];
             }
-            return Some(changes);
+            return Some((PassKind::Switched, changes));
         }
         let residual = slipping
             .iter()
@@ -1438,12 +1498,12 @@ impl ActiveSet {
         }
         if residual <= end && reversed.is_empty() {
             // the friction holds; the held normal states switch next pass
-            (held > 0).then_some(held)
+            (held > 0).then_some((PassKind::Settled, held))
         } else if !reversed.is_empty() && !holding && residual <= self.tol_f * self.settled_factor()
         {
             self.anderson.clear();
             self.slip_residual = f64::INFINITY;
-            Some(self.stick(live, trial, &reversed))
+            Some((PassKind::Switched, self.stick(live, trial, &reversed)))
         } else {
             // The slip forces are a fixed point of (forces → solve →
             // μ_k·r_n), affine for fixed directions. Anderson mixing
@@ -1456,7 +1516,7 @@ impl ActiveSet {
                 self.slip_force[q] = [next[2 * i], next[2 * i + 1]];
             }
             trial.out.slip_force_passes += 1;
-            Some(changes)
+            Some((PassKind::SlipForces, changes))
         }
     }
 
@@ -1480,6 +1540,42 @@ impl ActiveSet {
             self.flip(q);
         }
         reversed.len()
+    }
+
+    /// The log's record of the pass just ended ([`PassRecord`]);
+    /// `factorised_before`: the step's factorisations when it began.
+    fn record(
+        &self,
+        live: &LiveSystem,
+        trial: &Trial,
+        kind: PassKind,
+        changes: usize,
+        factorised_before: usize,
+    ) -> PassRecord {
+        let mut count = [0usize; 3];
+        for pair in &live.pairs {
+            match trial.work[pair.point as usize].state {
+                PointState::Open => count[0] += 1,
+                PointState::Stick => count[1] += 1,
+                PointState::Slip => count[2] += 1,
+                PointState::Grouted => {}
+            }
+        }
+        PassRecord {
+            kind,
+            changes,
+            open: count[0],
+            stick: count[1],
+            slip: count[2],
+            factorised: trial.out.factorizations > factorised_before,
+            rank: self.last_correction.0,
+            couplings: self.last_correction.1,
+            slip_residual: self.slip_residual,
+            wrong_normal: self
+                .pivoting
+                .map(|b| b.last_wrong)
+                .filter(|&w| w != usize::MAX),
+        }
     }
 
     /// The largest tension left on a point the flip limit kept closed.

@@ -18,7 +18,7 @@ use super::ahead::{
     AheadStats, Analysed, Assembled, Births, BirthsPlacement, BuildBirths, FactorAhead,
     FactorGuess, NextStep, Order,
 };
-use super::contact_step::{self, Prepared, RefactorCounts, StepSystem};
+use super::contact_step::{self, PassRecord, Prepared, RefactorCounts, StepSystem};
 use super::error::MechError;
 use super::error::RESIDUAL_TOLERANCE;
 use super::frame::Frame;
@@ -273,6 +273,8 @@ pub struct MechanicsModel {
     restored_guess: Option<FactorGuess>,
     /// the nodes layer merging ties in the live system (sorted)
     merged: Vec<u32>,
+    /// the contact passes of the last step with joint pairs
+    joint_passes: Vec<PassRecord>,
 }
 
 impl MechState {
@@ -395,6 +397,7 @@ impl MechanicsModel {
             pours_ahead: PoursAhead::new(factor_ahead(&frame.settings)),
             restored_guess: None,
             merged: Vec::new(),
+            joint_passes: Vec::new(),
             frame,
         })
     }
@@ -1179,7 +1182,7 @@ impl MechanicsModel {
             points: &self.frame.points,
             day,
         };
-        let out = contact_step::solve(
+        let mut out = contact_step::solve(
             &step,
             &mut self.sys,
             &mut self.state.joints,
@@ -1198,6 +1201,7 @@ impl MechanicsModel {
         self.stats.refactor_reasons.add(&out.refactor_reasons);
         self.stats.capacitance.add(&out.capacitance);
         self.stats.seconds_joints += t_joint.elapsed().as_secs_f64() - out.seconds_numeric;
+        self.joint_passes = std::mem::take(&mut out.passes);
         Ok(out.x)
     }
 
@@ -1471,6 +1475,12 @@ impl MechanicsModel {
         let dofs: Vec<usize> = (0..live.n).filter(|&i| read[i]).collect();
         let (rows, entries) = live.solver.reach_size(&dofs);
         (dofs.len(), rows, entries)
+    }
+
+    /// The contact passes of the last step with joint pairs, one record
+    /// each (empty before such a step, and after a `qp` step).
+    pub fn joint_passes(&self) -> &[PassRecord] {
+        &self.joint_passes
     }
 
     /// Entries of the live system's Cholesky factor and the flops of one

@@ -621,7 +621,7 @@ fn all_lifts(mesh: &crate::mesh::Mesh) -> Vec<(u32, u32)> {
 pub const COMPLETE_STEP_MAX_PASSES: usize = 600;
 
 /// Cost of one mechanical step of the complete dam.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct FullDamMechCost {
     pub pairs: usize,
     pub step_s: f64,
@@ -633,6 +633,8 @@ pub struct FullDamMechCost {
     /// rows a contact pass reads (the pairs and their neighbours), and the
     /// rows and entries of L on their reach
     pub joint_reach: (usize, usize, usize),
+    /// the step's contact passes
+    pub passes: Vec<crate::mechanics::contact_step::PassRecord>,
 }
 
 /// Pours every lift on day 0 (no thermal field) and times the first
@@ -667,6 +669,7 @@ pub fn full_dam_mechanics_step_cost(
         joint_reach: m.joint_rows_reach(),
         pairs: m.state.joints.iter().filter(|j| j.paired).count(),
         step_s,
+        passes: m.joint_passes().to_vec(),
         stats: m.stats,
     })
 }

@@ -31,6 +31,7 @@ use std::collections::BTreeMap;
 
 use common::*;
 use groutready::material::ModulusLaw;
+use groutready::mechanics::contact_step::PassKind;
 use groutready::mechanics::joints::{JointPointState, PointState};
 use groutready::mechanics::{MechanicsModel, MechanicsSettings, Supports};
 use groutready::mesh::Mesh;
@@ -1798,7 +1799,42 @@ fn the_complete_dam_with_friction_loaded_at_once() {
             slip_only > 0 && slip_only < passes,
             "{slip_only} of {passes} passes moved only slip forces"
         );
+        assert_pass_log(&once, &h);
     }
+}
+
+/// The step's pass log (`MechanicsModel::joint_passes`) tells the same
+/// story as the step's counters and states: one record a pass, the last
+/// the answer, the slip-force passes and factorisations counted alike, a
+/// switching pass changing states and a slip-force pass none, and the last
+/// record's counts the states the step ended in.
+fn assert_pass_log(m: &MechanicsModel, h: &Health) {
+    let log = m.joint_passes();
+    assert_eq!(log.len(), m.stats.contact_iterations, "a record a pass");
+    let (last, before) = log.split_last().expect("passes");
+    assert_eq!(last.kind, PassKind::Answer);
+    assert!(before.iter().all(|p| p.kind != PassKind::Answer));
+    let count = |kind| log.iter().filter(|p| p.kind == kind).count();
+    assert_eq!(count(PassKind::SlipForces), m.stats.slip_force_passes);
+    let factorised = log.iter().filter(|p| p.factorised).count();
+    assert_eq!(factorised, m.stats.numeric, "factorisations");
+    assert!(log[0].factorised, "the step's first factor");
+    for (i, p) in log.iter().enumerate() {
+        match p.kind {
+            PassKind::Switched | PassKind::Settled => assert!(p.changes > 0, "pass {}", i + 1),
+            PassKind::SlipForces => {
+                assert_eq!(p.changes, 0, "pass {}", i + 1);
+                assert!(p.slip_residual.is_finite(), "pass {}", i + 1);
+            }
+            PassKind::Answer => assert_eq!(p.changes, 0),
+        }
+        // a pass on its own fresh factor needs no correction
+        if p.factorised {
+            assert_eq!(p.rank, 0, "pass {}", i + 1);
+        }
+    }
+    assert_eq!(last.open, h.open, "open points");
+    assert_eq!(last.stick + last.slip, h.closed, "closed points");
 }
 
 /// The complete dam under its weight alone, with a cap of 80 passes:
