@@ -51,7 +51,9 @@
 //!   exact path decides alike), or a
 //!   point slipped in tension (its force is then μ_k·max(r_n, 0) = 0), the
 //!   slip forces are a fixed point solved by Anderson mixing (re-solves,
-//!   no refactorisation).
+//!   no refactorisation), preconditioned from a step's second round of
+//!   block pivoting on by the secants of its earlier rounds
+//!   ([`RoundSecants`]).
 //!   A point may switch open ↔ closed or slip → stick [`MAX_FLIPS`] times
 //!   per step with the others; after that it is cycling. Without friction
 //!   the cycling points switch open ↔ closed one per pass, the least index
