@@ -51,9 +51,8 @@
 //!   exact path decides alike), or a
 //!   point slipped in tension (its force is then μ_k·max(r_n, 0) = 0), the
 //!   slip forces are a fixed point solved by Anderson mixing (re-solves,
-//!   no refactorisation), preconditioned from a step's second round of
-//!   block pivoting on by the secants of its earlier rounds
-//!   ([`RoundSecants`]).
+//!   no refactorisation), preconditioned after a step's first change of
+//!   states by the secants of its earlier rounds ([`RoundSecants`]).
 //!   A point may switch open ↔ closed or slip → stick [`MAX_FLIPS`] times
 //!   per step with the others; after that it is cycling. Without friction
 //!   the cycling points switch open ↔ closed one per pass, the least index
@@ -1812,10 +1811,12 @@ fn delassus(
 /// answer. A step's first round has no secants and iterates as before, to
 /// the bit.
 ///
-/// On the Xiaowan-like complete dam under its weight (5 Dec 2026): 122
-/// passes and 113.9 s against 149 and 122.6 s, 76 of them moving slip
-/// forces only against 100, the same factorisations (10) and the same
-/// final states; the demo's complete dam 63 passes against 66.
+/// On the Xiaowan-like complete dam under its weight (5 Dec 2026,
+/// alternated): 122 passes and 109.1 s against 149 and 122.7 s, 76 of
+/// them moving slip forces only against 100, the same factorisations (10)
+/// and the same final states; the demo's complete dam 63 passes against
+/// 66. A round here is the passes between two changes of states (block
+/// pivoting's switches, or reversed points stuck).
 #[derive(Debug)]
 struct RoundSecants {
     /// length of the vectors: two per live pair
