@@ -1888,11 +1888,8 @@ impl RoundSecants {
             return None;
         }
         let dr = nalgebra::DMatrix::from_fn(self.n, m, |i, j| self.dr[j][i]);
-        let scale = dr.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let pinv = dr
-            .svd(true, true)
-            .pseudo_inverse(1e-12 * scale.max(f64::MIN_POSITIVE))
-            .ok()?;
+        let cutoff = singular_cutoff(&dr);
+        let pinv = dr.svd(true, true).pseudo_inverse(cutoff).ok()?;
         let step = nalgebra::DMatrix::from_fn(self.n, m, |i, j| self.dx[j][i] + self.dr[j][i]);
         Some(SecantInverse { pinv, step })
     }
@@ -1904,6 +1901,14 @@ impl RoundSecants {
         let gamma = &inv.pinv * &r;
         Some((r - &inv.step * gamma).as_slice().to_vec())
     }
+}
+
+/// Singular values of a matrix of secant differences below which its
+/// least squares ([`Anderson`], [`RoundSecants`]) ignore a direction:
+/// 1e-12 of its largest entry.
+fn singular_cutoff(dr: &nalgebra::DMatrix<f64>) -> f64 {
+    let scale = dr.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    1e-12 * scale.max(f64::MIN_POSITIVE)
 }
 
 /// Anderson mixing (type II) for a fixed point x = F(x): the next iterate
@@ -1961,12 +1966,7 @@ impl Anderson {
             }
         }
         let rhs = nalgebra::DVector::from_column_slice(&rk);
-        let scale = dr.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let Ok(gamma) = dr
-            .clone()
-            .svd(true, true)
-            .solve(&rhs, 1e-12 * scale.max(f64::MIN_POSITIVE))
-        else {
+        let Ok(gamma) = dr.clone().svd(true, true).solve(&rhs, singular_cutoff(&dr)) else {
             self.clear();
             return fx.to_vec();
         };
