@@ -51,7 +51,7 @@ pub use ordering::{
     MetisKnobs, Ordering,
 };
 pub use quadrature::{gauss_hex, gauss_legendre, gauss_quad, Rule};
-pub use solver::{relative_residual, CholeskySolver, FactorBuffers, SolveError, SolverStats};
+pub use solver::{relative_residual, CholeskySolver, SolveError, SolverStats};
 pub use sparse::{Pattern, PatternError, SparseSym, NO_DOF};
 pub use thermal_kernels::{
     capacity_consistent, capacity_lumped, conductivity, element_volume_and_centroid,

@@ -103,38 +103,6 @@ pub struct SolverStats {
 /// them (the parallel ones: its version before this constant).
 const SOLVE_PAR: Par = Par::Seq;
 
-/// The value buffers of a factor (L's entries and the matrix placed in the
-/// elimination order), handed from a solver that is done with them to a new
-/// one ([`CholeskySolver::into_buffers`], [`CholeskySolver::furnish`]).
-///
-/// Why: each live set's solvers are new (the demo's 220 live sets, three
-/// solvers each, made 747 factors), and a new solver's factor came from
-/// fresh memory: a block of L's size (50 MB on the complete demo, GBs on
-/// the large arch) mapped anew, every page of it zeroed by the kernel on
-/// first touch and again by the solver, then unmapped with its pages. The
-/// last live set's buffers fit the next one's factor, a lift larger, when
-/// they were reserved with some room ([`L_ROOM`]); no value is read from
-/// them (faer zeroes L before it factorises).
-#[derive(Debug, Default)]
-pub struct FactorBuffers {
-    l_values: Vec<f64>,
-    placed: Vec<f64>,
-}
-
-impl FactorBuffers {
-    /// Entries of L the buffers hold without growing.
-    pub fn capacity(&self) -> usize {
-        self.l_values.capacity()
-    }
-}
-
-/// Room reserved beyond a factor's entries when its buffer is allocated
-/// anew, as a fraction of them (1/L_ROOM): the next live sets' factors then
-/// fit the buffer handed on. Untouched room costs address space, not
-/// memory (the blocks this large are mapped, their pages made on first
-/// touch).
-const L_ROOM: usize = 4;
-
 /// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
 /// factorisation per matrix, any number of solves.
 pub struct CholeskySolver {
@@ -241,28 +209,6 @@ impl CholeskySolver {
         })
     }
 
-    /// The solver's value buffers, for a later solver to factorise into
-    /// ([`CholeskySolver::furnish`]); its factor goes with them.
-    pub fn into_buffers(self) -> FactorBuffers {
-        FactorBuffers {
-            l_values: self.l_values,
-            placed: self.placed,
-        }
-    }
-
-    /// Gives a solver that has never factorised `buffers` to factorise into;
-    /// returns them untaken when it already has buffers of its own.
-    pub fn furnish(&mut self, buffers: FactorBuffers) -> Option<FactorBuffers> {
-        if self.l_values.capacity() > 0 || self.placed.capacity() > 0 {
-            return Some(buffers);
-        }
-        // their old values stay until overwritten: a factorisation writes
-        // every placed entry and faer zeroes L first
-        self.l_values = buffers.l_values;
-        self.placed = buffers.placed;
-        None
-    }
-
     /// The pattern the solver was analysed for.
     pub fn pattern(&self) -> &Arc<Pattern> {
         &self.pattern
@@ -364,17 +310,10 @@ impl CholeskySolver {
         let t = Instant::now();
         let len = self.symbolic.len_val();
         if self.l_values.len() != len {
-            if self.l_values.capacity() < len {
-                // freed first: the old block and the new one never both held
-                self.l_values = Vec::new();
-                self.l_values
-                    .try_reserve_exact(len + len / L_ROOM)
-                    .map_err(|_| {
-                        SolveError::Faer(format!("out of memory for {len} factor entries"))
-                    })?;
-            }
-            // within the capacity only the entries past the old length are
-            // written; faer zeroes L itself before it factorises
+            self.l_values = Vec::new();
+            self.l_values
+                .try_reserve_exact(len)
+                .map_err(|_| SolveError::Faer(format!("out of memory for {len} factor entries")))?;
             self.l_values.resize(len, 0.0);
         }
         let result = match (self.symbolic.raw(), &self.permuted) {
@@ -829,55 +768,6 @@ mod tests {
                     .all(|(x, y)| x.to_bits() == y.to_bits()),
                 "{ordering:?}: the factors differ"
             );
-        }
-    }
-
-    /// A solver furnished with another's buffers, which still hold that
-    /// factor's values, makes the factor a fresh solver makes, to the bit:
-    /// into a larger buffer without growing it, into a smaller one by
-    /// growing it; a solver with buffers of its own refuses them.
-    #[test]
-    fn a_factor_in_handed_on_buffers_is_a_fresh_one_to_the_bit() {
-        let factored = |a: &SparseSym| {
-            let mut s =
-                CholeskySolver::with_options(a.pattern().clone(), &Ordering::Metis, Par::Seq)
-                    .expect("analysis");
-            s.factorize(a).expect("positive definite");
-            s
-        };
-        let (large, small) = (laplacian(14), laplacian(9));
-        for (from, to) in [(&large, &small), (&small, &large)] {
-            let fresh = factored(to);
-            let old = factored(from);
-            let capacity = old.l_values.capacity();
-            let mut s =
-                CholeskySolver::with_options(to.pattern().clone(), &Ordering::Metis, Par::Seq)
-                    .expect("analysis");
-            assert!(s.furnish(old.into_buffers()).is_none(), "taken");
-            s.factorize(to).expect("positive definite");
-            assert_eq!(s.l_values.len(), fresh.l_values.len());
-            assert!(
-                s.l_values
-                    .iter()
-                    .zip(&fresh.l_values)
-                    .all(|(x, y)| x.to_bits() == y.to_bits()),
-                "the factors differ"
-            );
-            if capacity >= fresh.l_values.len() {
-                assert_eq!(s.l_values.capacity(), capacity, "the buffer kept");
-            } else {
-                let len = fresh.l_values.len();
-                assert!(
-                    s.l_values.capacity() >= len + len / L_ROOM,
-                    "grown with room"
-                );
-            }
-            let mut b = vec![1.0; to.n()];
-            let mut c = b.clone();
-            s.solve_in_place(&mut b).expect("solve");
-            fresh.solve_in_place(&mut c).expect("solve");
-            assert_eq!(b, c);
-            assert!(s.furnish(FactorBuffers::default()).is_some(), "refused");
         }
     }
 }

@@ -81,12 +81,6 @@
 //!
 //! Off (`solver.factor_ahead = false`) where the second core is busy: the
 //! planner's two remedy searches already run side by side.
-//!
-//! A live set's solvers end with it: their value buffers are kept
-//! ([`FactorAhead::recycle`], at most [`POOLED`]) and the next live set's
-//! new solvers factorise into them ([`FactorAhead::furnish`]) instead of
-//! fresh memory the kernel must map and zero (see
-//! [`crate::fem::FactorBuffers`]).
 
 use std::collections::VecDeque;
 use std::thread::JoinHandle;
@@ -94,7 +88,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fem::{CholeskySolver, FactorBuffers, SolveError, SparseSym};
+use crate::fem::{CholeskySolver, SolveError, SparseSym};
 use crate::material::creep::StepCoefficients;
 
 use super::contact_step::Prepared;
@@ -176,14 +170,8 @@ pub struct FactorAhead {
     /// how long the last step waited for its factor made ahead [s]
     last_waited: f64,
     placement: BirthsPlacement,
-    /// the buffers of solvers whose live set has ended, largest last
-    pool: Vec<FactorBuffers>,
     pub stats: AheadStats,
 }
-
-/// Buffers of ended solvers kept for new ones: as many as a live set's
-/// solvers beside the step's own (the one made ahead and the spare).
-const POOLED: usize = 2;
 
 impl Drop for FactorAhead {
     /// A run that ends (or fails) with a factorisation running waits for it.
@@ -365,9 +353,8 @@ enum JobWork {
     /// a solver on this live system, and the order's K̃ and first-pass
     /// matrix
     Solver(Box<(CholeskySolver, Assembled, Prepared)>),
-    /// the next step's own live system, from its analysis, and buffers for
-    /// its solver to factorise into
-    Births(BuildBirths, Option<FactorBuffers>),
+    /// the next step's own live system, from its analysis
+    Births(BuildBirths),
 }
 
 /// A finished [`Job`].
@@ -401,12 +388,9 @@ impl Job {
                     let (solver, assembled, prepared) = *made;
                     (Target::Solver(solver), assembled, prepared)
                 }
-                JobWork::Births(build, buffers) => match build() {
-                    Some(mut a) => {
+                JobWork::Births(build) => match build() {
+                    Some(a) => {
                         analysed = a.seconds;
-                        if let Some(b) = buffers {
-                            a.births.sys.solver.furnish(b);
-                        }
                         (Target::Born(Box::new(a.births)), a.assembled, a.prepared)
                     }
                     None => {
@@ -513,42 +497,10 @@ impl FactorAhead {
     /// Forgets everything made for the live system before a rebuild or a
     /// restore.
     pub fn forget(&mut self) {
-        if let Some(made) = self.ready.take() {
+        if self.ready.take().is_some() {
             self.stats.discarded += 1;
-            if let Target::Solver(s) = made.target {
-                self.recycle(s);
-            }
         }
-        if let Some(s) = self.spare.take() {
-            self.recycle(s);
-        }
-    }
-
-    /// Keeps the buffers of a solver whose live set has ended, for a new
-    /// solver to factorise into ([`FactorAhead::furnish`]); the smallest are
-    /// let go past [`POOLED`].
-    pub fn recycle(&mut self, solver: CholeskySolver) {
-        let buffers = solver.into_buffers();
-        if buffers.capacity() == 0 {
-            return;
-        }
-        let at = self
-            .pool
-            .partition_point(|b| b.capacity() <= buffers.capacity());
-        self.pool.insert(at, buffers);
-        if self.pool.len() > POOLED {
-            self.pool.remove(0);
-        }
-    }
-
-    /// Gives a new solver the largest buffers kept, if any
-    /// ([`CholeskySolver::furnish`]).
-    pub fn furnish(&mut self, solver: &mut CholeskySolver) {
-        if let Some(buffers) = self.pool.pop() {
-            if let Some(untaken) = solver.furnish(buffers) {
-                self.pool.push(untaken);
-            }
-        }
+        self.spare = None;
     }
 
     /// The live system made ahead for the elements `live`, if one was (its
@@ -558,9 +510,7 @@ impl FactorAhead {
         if let Some(made) = self.ready.as_mut() {
             if matches!(&made.target, Target::Born(b) if b.live == live && b.merged == merged) {
                 if let Target::Born(births) = std::mem::replace(&mut made.target, Target::Adopted) {
-                    if let Some(s) = self.spare.take() {
-                        self.recycle(s);
-                    }
+                    self.spare = None;
                     return Some(births.sys);
                 }
             }
@@ -590,8 +540,6 @@ impl FactorAhead {
             if let Target::Solver(s) = made.target {
                 if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) {
                     self.spare = Some(s);
-                } else {
-                    self.recycle(s);
                 }
             }
             return None;
@@ -647,27 +595,14 @@ impl FactorAhead {
     /// spare fits).
     pub fn job(&mut self, order: Order, live: &LiveSystem) -> Result<Job, SolveError> {
         let work = match order.work {
-            Work::Births(build) => {
-                // the spare is this live set's, which the pours end
-                if let Some(s) = self.spare.take() {
-                    self.recycle(s);
-                }
-                JobWork::Births(build, self.pool.pop())
-            }
+            Work::Births(build) => JobWork::Births(build),
             Work::Made {
                 assembled,
                 prepared,
             } => {
                 let solver = match self.spare.take() {
                     Some(s) if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) => s,
-                    other => {
-                        if let Some(s) = other {
-                            self.recycle(s);
-                        }
-                        let mut forked = live.solver.fork()?;
-                        self.furnish(&mut forked);
-                        forked
-                    }
+                    _ => live.solver.fork()?,
                 };
                 JobWork::Solver(Box::new((solver, assembled, prepared)))
             }

@@ -481,7 +481,7 @@ impl MechanicsModel {
         for (p, st) in self.newly_paired(&pair_live) {
             self.state.joints[p] = st;
         }
-        let sys = match self.ahead.adopt(&self.state.live, &merged) {
+        self.sys = match self.ahead.adopt(&self.state.live, &merged) {
             Some(sys) => sys,
             None => match self.analysed_ahead(&merged) {
                 Some(sys) => sys,
@@ -491,10 +491,6 @@ impl MechanicsModel {
                 }
             },
         };
-        // the ended live set's factor memory serves the new one's
-        let ended = std::mem::replace(&mut self.sys, sys);
-        self.ahead.recycle(ended.solver);
-        self.ahead.furnish(&mut self.sys.solver);
         self.stats.max_merged_nodes = self.stats.max_merged_nodes.max(merged.len());
         self.merged = merged;
         self.dirty = false;
