@@ -1485,8 +1485,7 @@ impl ActiveSet {
             // was tried on the complete Xiaowan-like dam: its secants mix
             // two maps and it took 214 passes against 140. The round's
             // secants precondition the next rounds instead: `RoundSecants`.)
-            self.anderson.clear();
-            self.secants.end_round();
+            self.new_round();
             for &q in &slipping {
                 self.slip_force[q] = mapped[q];
             }
@@ -1512,8 +1511,7 @@ impl ActiveSet {
             (held > 0).then_some((PassKind::Settled, held))
         } else if !reversed.is_empty() && !holding && residual <= self.tol_f * self.settled_factor()
         {
-            self.anderson.clear();
-            self.secants.end_round();
+            self.new_round();
             self.slip_residual = f64::INFINITY;
             Some((PassKind::Switched, self.stick(live, trial, &reversed)))
         } else {
@@ -1531,6 +1529,14 @@ impl ActiveSet {
             trial.out.slip_force_passes += 1;
             Some((PassKind::SlipForces, changes))
         }
+    }
+
+    /// The states changed: the slip forces' map is another one, so
+    /// Anderson's history starts empty and the ended round's secants join
+    /// the earlier rounds' ([`RoundSecants`]).
+    fn new_round(&mut self) {
+        self.anderson.clear();
+        self.secants.end_round();
     }
 
     /// Records this pass's slip forces and their residual for the next
