@@ -231,7 +231,6 @@ impl LiveSystem {
             }
         };
         let ordering_seconds = t.elapsed().as_secs_f64();
-        let solver = CholeskySolver::with_options(pattern.clone(), &ordering, par)?;
         let Numbered {
             index_of,
             node_dofs,
@@ -244,6 +243,8 @@ impl LiveSystem {
         } = numbered;
         let mut supported_r = reduced_supports(n_all, &node_dofs, &pairs, points, supported)?;
         supported_r.truncate(n);
+        // every matrix the step factorises holds the supports
+        let solver = CholeskySolver::with_held(pattern.clone(), &ordering, par, &supported_r)?;
         let live_elements = numbered_elements
             .into_iter()
             .map(|el| {
