@@ -47,10 +47,19 @@ fn main() -> anyhow::Result<()> {
             Ordering::Custom(nested_dissection(&pattern, &xyz, 256)),
         ));
     }
+    let mut runs = Vec::new();
     for (name, ord) in orderings {
+        runs.push((name.to_string(), ord.clone(), false));
+        runs.push((format!("{name}+held"), ord, true));
+    }
+    for (name, ord, held) in runs {
         for (pname, par) in [("seq", faer::Par::Seq), ("rayon", faer::Par::rayon(0))] {
             let t = Instant::now();
-            let mut s = CholeskySolver::with_options(pattern.clone(), &ord, par)?;
+            let mut s = if held {
+                CholeskySolver::with_held(pattern.clone(), &ord, par, &fixed)?
+            } else {
+                CholeskySolver::with_options(pattern.clone(), &ord, par)?
+            };
             let ts = t.elapsed().as_secs_f64();
             let t = Instant::now();
             s.factorize(&a)?;
@@ -75,8 +84,9 @@ fn main() -> anyhow::Result<()> {
                 })
                 .collect::<anyhow::Result<_>>()?;
             println!(
-                "{name:6} {pname:5} n={n} nnzL={} symb {ts:.3} num {t1:.3}/{t2:.3} solves {}",
+                "{name:10} {pname:5} n={n} nnzL={} {:.2} Gflop symb {ts:.3} num {t1:.3}/{t2:.3} solves {}",
                 s.factor_nnz(),
+                s.factor_flops() * 1e-9,
                 solves.join(", ")
             );
         }

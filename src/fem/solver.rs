@@ -211,9 +211,11 @@ impl CholeskySolver {
             Ordering::Metis => {
                 let fwd = metis_nested_dissection(&pattern)
                     .map_err(|e| SolveError::Faer(e.to_string()))?;
-                symbolic_custom(structure, &fwd)?
+                symbolic_custom(structure, &held_first(fwd, held.as_deref()))?
             }
-            Ordering::Custom(fwd) => symbolic_custom(structure, fwd)?,
+            Ordering::Custom(fwd) => {
+                symbolic_custom(structure, &held_first(fwd.clone(), held.as_deref()))?
+            }
         }
         .map_err(|e| SolveError::Faer(format!("symbolic Cholesky: {e:?}")))?;
         let permuted = permuted_lower(&pattern, &symbolic, held.as_deref().map(|h| h.as_slice()))
@@ -700,6 +702,22 @@ fn permuted_lower(
         None => (0..pattern.n_dofs() as u32).collect(),
     };
     Some(PermutedLower::new(pattern, &inv, upper, held))
+}
+
+/// The elimination order `fwd` with the `held` rows first. A held row is
+/// a root of its own in the elimination tree wherever it stands, so it
+/// adds no fill anywhere; but left inside a separator it splits the
+/// separator's dense block into smaller supernodes: on the Xiaowan-like
+/// complete dam the factorisations then took 76.0 against 52.3 s for
+/// fewer flops.
+fn held_first(fwd: Vec<u32>, held: Option<&Vec<bool>>) -> Vec<u32> {
+    let Some(held) = held else {
+        return fwd;
+    };
+    let is_held = |d: &u32| held.get(*d as usize).copied().unwrap_or(false);
+    let (mut first, rest): (Vec<u32>, Vec<u32>) = fwd.into_iter().partition(is_held);
+    first.extend(rest);
+    first
 }
 
 /// The error of a matrix whose entry `k` (a held row's coupling) is not

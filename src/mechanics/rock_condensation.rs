@@ -134,7 +134,8 @@ impl CondensedRock {
             held_to_d,
         } = assemble(rock, &index, &held, n);
         let ordering = Ordering::Custom((0..n as u32).collect());
-        let mut solver = CholeskySolver::with_options(a_rr.pattern().clone(), &ordering, par(n))?;
+        let mut solver =
+            CholeskySolver::with_held(a_rr.pattern().clone(), &ordering, par(n), &held)?;
         solver.factorize(&a_rr)?;
         let mut condensed = CondensedRock {
             index,
