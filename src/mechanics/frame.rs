@@ -117,7 +117,9 @@ impl Frame {
             seconds_ordering: 0.0,
             seconds_condensation: 0.0,
         };
-        let ordering = ordering_plan(mesh, settings, &points, &ties, &merge, &mut costs)?;
+        let ordering = ordering_plan(
+            mesh, settings, &points, &supported, &ties, &merge, &mut costs,
+        )?;
         let rock = condensed_rock(
             mesh, settings, &tables, &ordering, &points, &supported, &ties,
         )?;
@@ -330,6 +332,7 @@ fn ordering_plan(
     mesh: &Mesh,
     settings: &MechanicsSettings,
     points: &[JointPoint],
+    supported: &[bool],
     ties: &Ties,
     merge: &LayerMerge,
     costs: &mut FrameCosts,
@@ -338,9 +341,15 @@ fn ordering_plan(
         OrderingKind::Amd => OrderingPlan::Amd,
         OrderingKind::MetisLiveSet => OrderingPlan::MetisLiveSet,
         OrderingKind::Metis => {
-            let c =
-                ConstructionOrdering::new(&mesh.elements, points, mesh.nodes.len(), ties, merge)
-                    .map_err(|source| MechError::Live { day: 0.0, source })?;
+            let c = ConstructionOrdering::new(
+                &mesh.elements,
+                points,
+                supported,
+                mesh.nodes.len(),
+                ties,
+                merge,
+            )
+            .map_err(|source| MechError::Live { day: 0.0, source })?;
             costs.metis_calls += c.metis_calls;
             costs.seconds_ordering += c.seconds;
             OrderingPlan::Construction(Arc::new(c))

@@ -633,14 +633,15 @@ pub const CONSTRUCTION_KNOBS: [MetisKnobs; 2] = [
 ];
 
 /// METIS's order of `pattern` under each of [`CONSTRUCTION_KNOBS`], the
-/// one whose Cholesky factor costs the fewest flops.
-fn least_flops_order(pattern: Pattern) -> Result<Vec<u32>, LiveError> {
+/// one whose Cholesky factor costs the fewest flops with the rows `held`
+/// held, as the steps factorise it.
+fn least_flops_order(pattern: Pattern, held: &[bool]) -> Result<Vec<u32>, LiveError> {
     let pattern = Arc::new(pattern);
     let mut best: Option<(f64, Vec<u32>)> = None;
     for knobs in CONSTRUCTION_KNOBS {
         let fwd = metis_nested_dissection_with(&pattern, knobs)?;
         let ordering = Ordering::Custom(fwd.clone());
-        let flops = CholeskySolver::with_options(pattern.clone(), &ordering, faer::Par::Seq)?
+        let flops = CholeskySolver::with_held(pattern.clone(), &ordering, faer::Par::Seq, held)?
             .factor_flops();
         if best.as_ref().is_none_or(|(f, _)| flops < *f) {
             best = Some((flops, fwd));
@@ -653,10 +654,13 @@ impl ConstructionOrdering {
     /// METIS on the complete dam of `conn` with all of `points` paired and
     /// the nodes `ties` ties tied, and those `merge` may tie tied too; a
     /// node merging may tie comes just before the first of its masters
-    /// (measured in [`super::layer_merging`]).
+    /// (measured in [`super::layer_merging`]). The global node dofs
+    /// `supported` are held in every step's factor, so the order is
+    /// chosen by the flops of a factor that holds them.
     pub fn new(
         conn: &[[u32; 8]],
         points: &[JointPoint],
+        supported: &[bool],
         n_nodes: usize,
         ties: &Ties,
         merge: &LayerMerge,
@@ -685,7 +689,14 @@ impl ConstructionOrdering {
             rock: None,
         };
         let complete = Numbered::new(elements, points, &pair_live, n_nodes)?;
-        let fwd = least_flops_order(complete.pattern())?;
+        let held = reduced_supports(
+            complete.n,
+            &complete.node_dofs,
+            &complete.pairs,
+            points,
+            supported,
+        )?;
+        let fwd = least_flops_order(complete.pattern(), &held)?;
         let keys = complete.keys(&point_of_b);
         // even ranks are free for the nodes merging may tie: each is
         // eliminated with the master outside the separator the other is in
