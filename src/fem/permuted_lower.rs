@@ -29,6 +29,12 @@ use super::sparse::Pattern;
 /// Marks an entry of A left out of the permuted structure (a held row's).
 const LEFT_OUT: u32 = u32::MAX;
 
+/// Whether entry (i, j) of A leaves the analysis: an off-diagonal entry of
+/// a held row or column.
+pub(super) fn left_out(i: usize, j: usize, held: Option<&[bool]>) -> bool {
+    i != j && held.is_some_and(|h| h[i] || h[j])
+}
+
 /// The lower (or upper) triangle of P A Pᵀ's structure, and where each
 /// stored entry of A (its upper triangle, column by column) goes in it.
 #[derive(Debug)]
@@ -48,10 +54,7 @@ impl PermutedLower {
     pub fn new(pattern: &Pattern, inv: &[u32], upper: bool, held: Option<&[bool]>) -> Self {
         let n = pattern.n_dofs();
         let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-        let kept = |k: usize, j: usize| {
-            let i = ri[k] as usize;
-            i == j || held.is_none_or(|h| !h[i] && !h[j])
-        };
+        let kept = |k: usize, j: usize| !left_out(ri[k] as usize, j, held);
         // (row, column) in the permuted structure
         let place = |k: usize, j: usize| {
             let (a, b) = (inv[ri[k] as usize], inv[j]);

@@ -31,7 +31,7 @@ use super::half_solves::{
     forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
 };
 use super::ordering::{metis_nested_dissection, Ordering};
-use super::permuted_lower::PermutedLower;
+use super::permuted_lower::{left_out, PermutedLower};
 use super::sparse::{Pattern, SparseSym};
 
 impl SolveError {
@@ -749,7 +749,7 @@ impl Decoupled {
             let rows = &ri[cp[j] as usize..cp[j + 1] as usize];
             row_idx.extend(
                 rows.iter()
-                    .filter(|&&i| i as usize == j || (!held[i as usize] && !held[j])),
+                    .filter(|&&i| !left_out(i as usize, j, Some(held))),
             );
             col_ptr.push(row_idx.len() as u32);
         }
