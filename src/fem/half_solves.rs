@@ -106,6 +106,13 @@ pub(super) fn block<'a>(
     }
 }
 
+/// Stored entries of each block of a factor (its diagonal block whole).
+pub(super) fn block_entries(symbolic: &SymbolicCholesky<u32>) -> Vec<u64> {
+    (0..n_blocks(symbolic))
+        .map(|b| block_shape(symbolic, b).3.len() as u64)
+        .collect()
+}
+
 /// Number of blocks of a factor.
 fn n_blocks(symbolic: &SymbolicCholesky<u32>) -> usize {
     match symbolic.raw() {
@@ -160,6 +167,14 @@ impl BlockTree {
 
     pub(super) fn n_blocks(&self) -> usize {
         self.parent.len()
+    }
+
+    /// The parent of block `b`, None at a root.
+    pub(super) fn parent(&self, b: usize) -> Option<usize> {
+        match self.parent[b] {
+            ROOT => None,
+            p => Some(p as usize),
+        }
     }
 
     /// Marks the blocks on the path from `row`'s block to the root that

@@ -38,6 +38,7 @@ pub mod quad4;
 pub mod quadrature;
 pub mod solver;
 pub mod sparse;
+pub mod split_solve;
 pub mod thermal_kernels;
 
 pub use capacitance::{

@@ -28,11 +28,12 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
 use super::half_solves::{
-    forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
+    block_entries, forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
 };
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::permuted_lower::{left_out, PermutedLower};
 use super::sparse::{Pattern, SparseSym};
+use super::split_solve::SolveSplit;
 
 impl SolveError {
     /// The unknown (in the matrix's numbering) whose pivot failed.
@@ -111,6 +112,22 @@ pub struct SolverStats {
 /// them (the parallel ones: its version before this constant).
 const SOLVE_PAR: Par = Par::Seq;
 
+/// Entries of L from which a supernodal factor made on two or more
+/// threads is also swept on two ([`SolveSplit`]), its elimination tree
+/// cut into two forests: a sweep of 16M entries reads 128 MB, tens of
+/// milliseconds against a thread's start of microseconds. Smaller systems
+/// are solved beside other work (the factor made ahead, the thermal
+/// steps) on one core.
+pub const SPLIT_FROM_ENTRIES: usize = 1 << 24;
+
+/// A solver whose sweeps run on two cores: supernodal, at least
+/// [`SPLIT_FROM_ENTRIES`], factorised on two or more threads.
+fn two_cores(symbolic: &SymbolicCholesky<u32>, par: Par) -> bool {
+    matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
+        && symbolic.len_val() >= SPLIT_FROM_ENTRIES
+        && matches!(par, Par::Rayon(n) if n.get() >= 2)
+}
+
 /// Sparse Cholesky solver: symbolic analysis once per pattern, numeric
 /// factorisation per matrix, any number of solves.
 pub struct CholeskySolver {
@@ -119,6 +136,9 @@ pub struct CholeskySolver {
     symbolic: Arc<SymbolicCholesky<u32>>,
     /// the blocks and elimination tree of `symbolic`, for reach solves
     tree: Arc<BlockTree>,
+    /// the tree cut for sweeps on two cores: a supernodal factor of at
+    /// least [`SPLIT_FROM_ENTRIES`] entries factorised in parallel
+    split: Option<Arc<SolveSplit>>,
     /// the matrix's structure in the elimination order (made once, shared
     /// by forks): always for a supernodal analysis, and for a simplicial
     /// one with held rows (else faer permutes it)
@@ -226,9 +246,13 @@ impl CholeskySolver {
             symbolic_seconds: t.elapsed().as_secs_f64(),
             ..Default::default()
         };
+        let tree = BlockTree::new(&symbolic);
+        let split = two_cores(&symbolic, par)
+            .then(|| Arc::new(SolveSplit::new(&tree, &block_entries(&symbolic))));
         Ok(CholeskySolver {
             pattern,
-            tree: Arc::new(BlockTree::new(&symbolic)),
+            tree: Arc::new(tree),
+            split,
             symbolic: Arc::new(symbolic),
             permuted,
             held,
@@ -250,6 +274,7 @@ impl CholeskySolver {
             pattern: self.pattern.clone(),
             symbolic: self.symbolic.clone(),
             tree: self.tree.clone(),
+            split: self.split.clone(),
             permuted: self.permuted.clone(),
             held: self.held.clone(),
             placed: Vec::new(),
@@ -314,6 +339,24 @@ impl CholeskySolver {
     }
 
     /// True when faer chose its supernodal (dense-block) factorisation.
+    /// Sweeps every later solve of one right-hand side, and every half, on
+    /// two cores ([`SolveSplit`]), whatever the factor's size; a simplicial
+    /// factor is left as it is. What the solver does by itself from
+    /// [`SPLIT_FROM_ENTRIES`] on; for tests and benchmarks of smaller ones.
+    pub fn sweep_on_two_cores(&mut self) {
+        if self.is_supernodal() {
+            let split = SolveSplit::new(&self.tree, &block_entries(&self.symbolic));
+            self.split = Some(Arc::new(split));
+        }
+    }
+
+    /// Entries of L in the top and on each side of the cut its sweeps run
+    /// on two cores with ([`SPLIT_FROM_ENTRIES`]), None where they run on
+    /// one.
+    pub fn sweep_split(&self) -> Option<[u64; 3]> {
+        self.split.as_ref().map(|s| s.entries())
+    }
+
     pub fn is_supernodal(&self) -> bool {
         matches!(self.symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
     }
@@ -458,14 +501,20 @@ impl CholeskySolver {
         }
         let t = Instant::now();
         let mut rhs = rhs;
-        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))
-            .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
-        LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
-            Conj::No,
-            rhs.as_mut(),
-            SOLVE_PAR,
-            MemStack::new(&mut mem),
-        );
+        match &self.split {
+            Some(split) if k == 1 => self.split_solve(split, rhs.as_mut().col_mut(0)),
+            _ => {
+                let mut mem =
+                    MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))
+                        .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
+                LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs.as_mut(),
+                    SOLVE_PAR,
+                    MemStack::new(&mut mem),
+                );
+            }
+        }
         let seconds = t.elapsed().as_secs_f64();
         self.record(|s| {
             s.n_solves += 1;
@@ -483,6 +532,25 @@ impl CholeskySolver {
             }
         }
         Ok(())
+    }
+
+    /// One right-hand side solved by the two sweeps of `split`, permuted
+    /// in and out.
+    fn split_solve(&self, split: &SolveSplit, mut b: faer::ColMut<'_, f64>) {
+        let mut c: Vec<f64> = match self.symbolic.perm() {
+            Some(p) => p.arrays().0.iter().map(|&i| b[i as usize]).collect(),
+            None => (0..b.nrows()).map(|i| b[i]).collect(),
+        };
+        split.sweep(&self.symbolic, &self.l_values, &mut c, true);
+        split.sweep(&self.symbolic, &self.l_values, &mut c, false);
+        match self.symbolic.perm() {
+            Some(p) => {
+                for (k, &i) in p.arrays().0.iter().enumerate() {
+                    b[i as usize] = c[k];
+                }
+            }
+            None => (0..c.len()).for_each(|i| b[i] = c[i]),
+        }
     }
 
     /// Solves A x = b in place (`rhs` = b on entry, x on exit).
@@ -526,6 +594,10 @@ impl CholeskySolver {
     /// One triangle of the factor applied to `x` (permuted numbering):
     /// L⁻¹x when `lower`, L⁻ᵀx otherwise.
     fn triangle_solve(&self, x: &mut [f64], lower: bool) -> Result<(), SolveError> {
+        if let Some(split) = &self.split {
+            split.sweep(&self.symbolic, &self.l_values, x, lower);
+            return Ok(());
+        }
         let n = x.len();
         let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(1, SOLVE_PAR))
             .map_err(|e| SolveError::Faer(format!("scratch allocation: {e}")))?;
@@ -644,16 +716,30 @@ impl CholeskySolver {
         // of its columns need
         let mut order: Vec<usize> = (0..columns.len()).collect();
         order.sort_by_key(|&c| permuted[c].iter().map(|e| e.0).min());
+        let batches: Vec<Vec<Vec<(usize, f64)>>> = order
+            .chunks(REACH_BATCH)
+            .map(|batch| {
+                (batch.iter())
+                    .map(|&c| std::mem::take(&mut permuted[c]))
+                    .collect()
+            })
+            .collect();
+        let solve = |cols: &Vec<Vec<(usize, f64)>>, work: &mut ReachWork| {
+            forward_reach_many(&self.symbolic, &self.l_values, &self.tree, cols, work)
+        };
+        // batches are independent: on two cores where the sweeps are
+        // (each batch the same bits wherever it runs)
+        let solved: Vec<Vec<ReachColumn>> = if self.split.is_some() && batches.len() > 1 {
+            use rayon::prelude::*;
+            (batches.par_iter())
+                .map_init(ReachWork::default, |w, cols| solve(cols, w))
+                .collect()
+        } else {
+            batches.iter().map(|cols| solve(cols, work)).collect()
+        };
         let mut out = vec![ReachColumn::default(); columns.len()];
-        for batch in order.chunks(REACH_BATCH) {
-            let cols: Vec<Vec<(usize, f64)>> = batch
-                .iter()
-                .map(|&c| std::mem::take(&mut permuted[c]))
-                .collect();
-            let ys = forward_reach_many(&self.symbolic, &self.l_values, &self.tree, &cols, work);
-            for (&c, y) in batch.iter().zip(ys) {
-                out[c] = y;
-            }
+        for (&c, y) in order.iter().zip(solved.into_iter().flatten()) {
+            out[c] = y;
         }
         let seconds = t.elapsed().as_secs_f64();
         self.record(|s| {

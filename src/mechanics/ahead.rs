@@ -223,7 +223,7 @@ pub struct Assembled {
 /// Where a factor is made: a solver on this step's live system, or the
 /// next step's own live system.
 enum Target {
-    Solver(CholeskySolver),
+    Solver(Box<CholeskySolver>),
     Born(Box<Births>),
     /// the live system adopted (its solver holds the factor)
     Adopted,
@@ -386,7 +386,7 @@ impl Job {
             let (target, assembled, prepared) = match work {
                 JobWork::Solver(made) => {
                     let (solver, assembled, prepared) = *made;
-                    (Target::Solver(solver), assembled, prepared)
+                    (Target::Solver(Box::new(solver)), assembled, prepared)
                 }
                 JobWork::Births(build) => match build() {
                     Some(a) => {
@@ -539,14 +539,14 @@ impl FactorAhead {
             self.stats.discarded += 1;
             if let Target::Solver(s) = made.target {
                 if std::sync::Arc::ptr_eq(s.pattern(), live.solver.pattern()) {
-                    self.spare = Some(s);
+                    self.spare = Some(*s);
                 }
             }
             return None;
         }
         if let Target::Solver(mut solver) = made.target {
-            std::mem::swap(&mut live.solver, &mut solver);
-            self.spare = Some(solver);
+            std::mem::swap(&mut live.solver, &mut *solver);
+            self.spare = Some(*solver);
         }
         self.stats.used += 1;
         Some(made.prepared)
@@ -642,7 +642,7 @@ impl FactorAhead {
             Err(_) => {
                 self.stats.failed += 1;
                 if let Target::Solver(s) = made.target {
-                    self.spare = Some(s);
+                    self.spare = Some(*s);
                 }
                 false
             }

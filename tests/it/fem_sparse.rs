@@ -1045,6 +1045,71 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
     }
 }
 
+/// A solve whose two sweeps run on two cores, the elimination tree cut
+/// into two forests and the blocks above them (`fem::split_solve`), equals
+/// the solve on one core to round-off, whole and in halves; with the
+/// supports held (roots of their own) and without; and the cut puts most
+/// of L on the two sides, about evenly.
+#[test]
+fn sweeps_on_two_cores_equal_the_sweeps_on_one() {
+    let mut rng = Rng(43);
+    let g = grid([18, 16, 14], 1.0, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let (a, _) = assemble_both(&g, 1.0, false);
+    let base: Vec<bool> = (0..n).map(|i| i % 97 == 0).collect();
+    let mut m = a.clone();
+    m.apply_dirichlet(&base);
+    for held in [false, true] {
+        let make = || {
+            let pattern = a.pattern().clone();
+            let par = faer::Par::rayon(2);
+            let mut s = if held {
+                CholeskySolver::with_held(pattern, &Ordering::Metis, par, &base).unwrap()
+            } else {
+                CholeskySolver::with_options(pattern, &Ordering::Metis, par).unwrap()
+            };
+            s.factorize(&m).unwrap();
+            s
+        };
+        let one = make();
+        let mut two = make();
+        assert!(
+            one.is_supernodal() && one.sweep_split().is_none(),
+            "small: one core"
+        );
+        two.sweep_on_two_cores();
+        let [top, left, right] = two.sweep_split().unwrap();
+        let total = (top + left + right) as f64;
+        eprintln!("held {held}: top {top}, sides {left} and {right} entries");
+        assert!((top as f64) < 0.25 * total, "the top is a small part");
+        assert!(
+            left.abs_diff(right) as f64 <= 0.25 * total,
+            "the sides about even"
+        );
+        assert!(left > 0 && right > 0);
+        let b: Vec<f64> = (0..n).map(|_| rng.range(-1e5, 1e5)).collect();
+        let (mut x1, mut x2) = (b.clone(), b.clone());
+        one.solve_in_place(&mut x1).unwrap();
+        two.solve_in_place(&mut x2).unwrap();
+        let (diff, scale) = max_difference(&x2, &x1);
+        assert!(diff <= 1e-13 * scale, "held {held}: {diff:e} of {scale:e}");
+        let mut halves = b.clone();
+        two.forward_in_place(&mut halves).unwrap();
+        two.backward_in_place(&mut halves).unwrap();
+        let (diff, scale) = max_difference(&halves, &x1);
+        assert!(
+            diff <= 1e-13 * scale,
+            "held {held}, halves: {diff:e} of {scale:e}"
+        );
+        // the same cut gives the same bits on every call
+        let mut again = b.clone();
+        two.solve_in_place(&mut again).unwrap();
+        assert_eq!(again, x2);
+        let res = groutready::fem::relative_residual(&m, &x2, &b);
+        assert!(res < 1e-12, "held {held}: residual {res:e}");
+    }
+}
+
 /// The products of reach columns computed block by block (`gram`, what
 /// the capacitance matrices use) equal the products pair by pair, on and
 /// below the diagonal of the new columns' block and against the old
