@@ -75,7 +75,7 @@ fn main() -> anyhow::Result<()> {
             s.factorize(&a)?;
             let t2 = t.elapsed().as_secs_f64();
             // one right-hand side is swept on two cores where the factor is
-            // large and made in parallel (`fem::split_solve`), several
+            // large and made in parallel (`fem::two_cores`), several
             // sequentially (`fem::solver`'s SOLVE_PAR): best of 5, for 1, 4
             // and 16 right-hand sides
             let solves: Vec<String> = [1, 4, 16]
@@ -91,9 +91,15 @@ fn main() -> anyhow::Result<()> {
                     Ok(format!("{k}: {:.1} ms", best * 1e3))
                 })
                 .collect::<anyhow::Result<_>>()?;
-            let split = s.sweep_split().map_or(String::new(), |[top, a, b]| {
-                format!(" (one swept on two cores: top {top}, sides {a} and {b} entries)")
-            });
+            let split = match (s.sweep_split(), s.factor_split()) {
+                (Some([top, a, b]), Some([ft, fa, fb])) => format!(
+                    " (on two cores: top {top}, sides {a} and {b} entries; top {:.1}, sides {:.1} and {:.1} Gflop)",
+                    ft as f64 * 1e-9,
+                    fa as f64 * 1e-9,
+                    fb as f64 * 1e-9
+                ),
+                _ => String::new(),
+            };
             println!(
                 "{name:10} {pname:5} n={n} nnzL={} {:.2} Gflop symb {ts:.3} num {t1:.3}/{t2:.3} solves {}{split}",
                 s.factor_nnz(),

@@ -169,6 +169,11 @@ impl BlockTree {
         self.parent.len()
     }
 
+    /// The block of a column of L (the permuted numbering).
+    pub(super) fn block_of(&self, column: usize) -> usize {
+        self.block_of[column] as usize
+    }
+
     /// The parent of block `b`, None at a root.
     pub(super) fn parent(&self, b: usize) -> Option<usize> {
         match self.parent[b] {

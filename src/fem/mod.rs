@@ -38,8 +38,8 @@ pub mod quad4;
 pub mod quadrature;
 pub mod solver;
 pub mod sparse;
-pub mod split_solve;
 pub mod thermal_kernels;
+pub mod two_cores;
 
 pub use capacitance::{
     Capacitance, CapacitanceStats, Corrected, Coupling, Refine, RowChange, REFINE_TO,

@@ -28,12 +28,12 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 use thiserror::Error;
 
 use super::half_solves::{
-    block_entries, forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
+    forward_reach_many, reach_size, BlockTree, ReachColumn, ReachWork, REACH_BATCH,
 };
 use super::ordering::{metis_nested_dissection, Ordering};
 use super::permuted_lower::{left_out, PermutedLower};
 use super::sparse::{Pattern, SparseSym};
-use super::split_solve::SolveSplit;
+use super::two_cores::TwoCores;
 
 impl SolveError {
     /// The unknown (in the matrix's numbering) whose pivot failed.
@@ -113,7 +113,7 @@ pub struct SolverStats {
 const SOLVE_PAR: Par = Par::Seq;
 
 /// Entries of L from which a supernodal factor made on two or more
-/// threads is also swept on two ([`SolveSplit`]), its elimination tree
+/// threads is also factorised and swept on two ([`TwoCores`]), its elimination tree
 /// cut into two forests: a sweep of 16M entries reads 128 MB, tens of
 /// milliseconds against a thread's start of microseconds. Smaller systems
 /// are solved beside other work (the factor made ahead, the thermal
@@ -122,7 +122,7 @@ pub const SPLIT_FROM_ENTRIES: usize = 1 << 24;
 
 /// A solver whose sweeps run on two cores: supernodal, at least
 /// [`SPLIT_FROM_ENTRIES`], factorised on two or more threads.
-fn two_cores(symbolic: &SymbolicCholesky<u32>, par: Par) -> bool {
+fn large_for_two_cores(symbolic: &SymbolicCholesky<u32>, par: Par) -> bool {
     matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
         && symbolic.len_val() >= SPLIT_FROM_ENTRIES
         && matches!(par, Par::Rayon(n) if n.get() >= 2)
@@ -138,7 +138,7 @@ pub struct CholeskySolver {
     tree: Arc<BlockTree>,
     /// the tree cut for sweeps on two cores: a supernodal factor of at
     /// least [`SPLIT_FROM_ENTRIES`] entries factorised in parallel
-    split: Option<Arc<SolveSplit>>,
+    split: Option<Arc<TwoCores>>,
     /// the matrix's structure in the elimination order (made once, shared
     /// by forks): always for a supernodal analysis, and for a simplicial
     /// one with held rows (else faer permutes it)
@@ -247,8 +247,9 @@ impl CholeskySolver {
             ..Default::default()
         };
         let tree = BlockTree::new(&symbolic);
-        let split = two_cores(&symbolic, par)
-            .then(|| Arc::new(SolveSplit::new(&tree, &block_entries(&symbolic))));
+        let split = large_for_two_cores(&symbolic, par)
+            .then(|| TwoCores::new(&symbolic, &tree).map(Arc::new))
+            .flatten();
         Ok(CholeskySolver {
             pattern,
             tree: Arc::new(tree),
@@ -340,13 +341,13 @@ impl CholeskySolver {
 
     /// True when faer chose its supernodal (dense-block) factorisation.
     /// Sweeps every later solve of one right-hand side, and every half, on
-    /// two cores ([`SolveSplit`]), whatever the factor's size; a simplicial
+    /// two cores ([`TwoCores`]), and its numeric factorisations too,
+    /// whatever the factor's size; a simplicial
     /// factor is left as it is. What the solver does by itself from
     /// [`SPLIT_FROM_ENTRIES`] on; for tests and benchmarks of smaller ones.
-    pub fn sweep_on_two_cores(&mut self) {
+    pub fn on_two_cores(&mut self) {
         if self.is_supernodal() {
-            let split = SolveSplit::new(&self.tree, &block_entries(&self.symbolic));
-            self.split = Some(Arc::new(split));
+            self.split = TwoCores::new(&self.symbolic, &self.tree).map(Arc::new);
         }
     }
 
@@ -354,7 +355,13 @@ impl CholeskySolver {
     /// on two cores with ([`SPLIT_FROM_ENTRIES`]), None where they run on
     /// one.
     pub fn sweep_split(&self) -> Option<[u64; 3]> {
-        self.split.as_ref().map(|s| s.entries())
+        self.split.as_ref().map(|s| s.sweep.entries())
+    }
+
+    /// Flops of the top and of each side of the cut its numeric
+    /// factorisation runs on two cores with, None where it runs as faer's.
+    pub fn factor_split(&self) -> Option<[u64; 3]> {
+        self.split.as_ref().map(|s| s.factor.entries())
     }
 
     pub fn is_supernodal(&self) -> bool {
@@ -416,6 +423,10 @@ impl CholeskySolver {
                 .map_err(|k| held_coupling(&self.pattern, self.held.as_deref(), k))?;
         }
         let result = match (self.symbolic.raw(), &self.permuted) {
+            (SymbolicCholeskyRaw::Supernodal(s), Some(p)) if self.split.is_some() => {
+                let two = self.split.as_deref().expect("checked");
+                two.factorize(s, p.matrix(&self.placed), &mut self.l_values, self.par)
+            }
             (SymbolicCholeskyRaw::Supernodal(s), Some(p)) => {
                 supernodal::factorize_supernodal_numeric_llt(
                     &mut self.l_values,
@@ -502,7 +513,7 @@ impl CholeskySolver {
         let t = Instant::now();
         let mut rhs = rhs;
         match &self.split {
-            Some(split) if k == 1 => self.split_solve(split, rhs.as_mut().col_mut(0)),
+            Some(split) if k == 1 => self.solve_on_two_cores(split, rhs.as_mut().col_mut(0)),
             _ => {
                 let mut mem =
                     MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, SOLVE_PAR))
@@ -536,13 +547,17 @@ impl CholeskySolver {
 
     /// One right-hand side solved by the two sweeps of `split`, permuted
     /// in and out.
-    fn split_solve(&self, split: &SolveSplit, mut b: faer::ColMut<'_, f64>) {
+    fn solve_on_two_cores(&self, split: &TwoCores, mut b: faer::ColMut<'_, f64>) {
         let mut c: Vec<f64> = match self.symbolic.perm() {
             Some(p) => p.arrays().0.iter().map(|&i| b[i as usize]).collect(),
             None => (0..b.nrows()).map(|i| b[i]).collect(),
         };
-        split.sweep(&self.symbolic, &self.l_values, &mut c, true);
-        split.sweep(&self.symbolic, &self.l_values, &mut c, false);
+        split
+            .sweep
+            .sweep(&self.symbolic, &self.l_values, &mut c, true);
+        split
+            .sweep
+            .sweep(&self.symbolic, &self.l_values, &mut c, false);
         match self.symbolic.perm() {
             Some(p) => {
                 for (k, &i) in p.arrays().0.iter().enumerate() {
@@ -595,7 +610,7 @@ impl CholeskySolver {
     /// L⁻¹x when `lower`, L⁻ᵀx otherwise.
     fn triangle_solve(&self, x: &mut [f64], lower: bool) -> Result<(), SolveError> {
         if let Some(split) = &self.split {
-            split.sweep(&self.symbolic, &self.l_values, x, lower);
+            split.sweep.sweep(&self.symbolic, &self.l_values, x, lower);
             return Ok(());
         }
         let n = x.len();

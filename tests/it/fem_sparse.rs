@@ -1045,13 +1045,15 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
     }
 }
 
-/// A solve whose two sweeps run on two cores, the elimination tree cut
-/// into two forests and the blocks above them (`fem::split_solve`), equals
-/// the solve on one core to round-off, whole and in halves; with the
-/// supports held (roots of their own) and without; and the cut puts most
-/// of L on the two sides, about evenly.
+/// A factor made on two cores and solved by sweeps on two cores, the
+/// elimination tree cut into two forests and the blocks above them
+/// (`fem::two_cores`), equals faer's to round-off, whole and in halves;
+/// with the supports held (roots of their own) and without; the cuts put
+/// most of the work on the two sides, about evenly; the same bits on
+/// every call; and a matrix that is not positive definite is refused with
+/// its pivot, as on one core.
 #[test]
-fn sweeps_on_two_cores_equal_the_sweeps_on_one() {
+fn factor_and_sweeps_on_two_cores_equal_faers() {
     let mut rng = Rng(43);
     let g = grid([18, 16, 14], 1.0, 0.2, true, &mut rng);
     let n = g.n_dofs();
@@ -1077,16 +1079,25 @@ fn sweeps_on_two_cores_equal_the_sweeps_on_one() {
             one.is_supernodal() && one.sweep_split().is_none(),
             "small: one core"
         );
-        two.sweep_on_two_cores();
-        let [top, left, right] = two.sweep_split().unwrap();
-        let total = (top + left + right) as f64;
-        eprintln!("held {held}: top {top}, sides {left} and {right} entries");
-        assert!((top as f64) < 0.25 * total, "the top is a small part");
-        assert!(
-            left.abs_diff(right) as f64 <= 0.25 * total,
-            "the sides about even"
-        );
-        assert!(left > 0 && right > 0);
+        two.on_two_cores();
+        two.factorize(&m).unwrap();
+        // the factorisation's top runs on both cores: a larger part of it
+        for (what, [top, left, right], most) in [
+            ("entries", two.sweep_split().unwrap(), 0.25),
+            ("flops", two.factor_split().unwrap(), 0.6),
+        ] {
+            let total = (top + left + right) as f64;
+            eprintln!("held {held}: top {top}, sides {left} and {right} {what}");
+            assert!(
+                (top as f64) < most * total,
+                "{what}: the top is a small part"
+            );
+            assert!(
+                left.abs_diff(right) as f64 <= 0.25 * total,
+                "{what}: the sides about even"
+            );
+            assert!(left > 0 && right > 0);
+        }
         let b: Vec<f64> = (0..n).map(|_| rng.range(-1e5, 1e5)).collect();
         let (mut x1, mut x2) = (b.clone(), b.clone());
         one.solve_in_place(&mut x1).unwrap();
@@ -1107,6 +1118,23 @@ fn sweeps_on_two_cores_equal_the_sweeps_on_one() {
         assert_eq!(again, x2);
         let res = groutready::fem::relative_residual(&m, &x2, &b);
         assert!(res < 1e-12, "held {held}: residual {res:e}");
+        // factorised again: the same bits
+        two.factorize(&m).unwrap();
+        let mut again = b.clone();
+        two.solve_in_place(&mut again).unwrap();
+        assert_eq!(again, x2);
+        // not positive definite: the same pivot refused as on one core
+        let mut bad = m.clone();
+        let k = n / 2 + 1;
+        bad.add_diag(k, -1e3 * bad.diag()[k]);
+        let (mut e1, mut e2) = (one.fork().unwrap(), two.fork().unwrap());
+        let r1 = e1.factorize(&bad).unwrap_err();
+        let r2 = e2.factorize(&bad).unwrap_err();
+        assert!(
+            matches!(r2, SolveError::NotPositiveDefinite { .. }),
+            "{r2:?}"
+        );
+        assert_eq!(r1.pivot_dof(), r2.pivot_dof(), "held {held}");
     }
 }
 
