@@ -27,6 +27,13 @@ pub const NO_DOF: u32 = u32::MAX;
 /// Marker in the scatter map for a local pair that touches a [`NO_DOF`].
 const SKIP: u32 = u32::MAX;
 
+/// Stored entries from which [`SparseSym::mul_vec`] sweeps on two threads:
+/// the large arch's mechanical systems (4M entries is about 100,000
+/// unknowns of hex8 solids), whose residual checks run at every contact
+/// pass while the other core waits; the demo's and the thermal systems
+/// stay on one, beside the work of the other core.
+pub const PAR_PRODUCT_ENTRIES: usize = 1 << 22;
+
 /// Why a pattern could not be built.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum PatternError {
@@ -620,13 +627,48 @@ impl SparseSym {
     }
 
     /// y = f(A) f(x), f applied entrywise, in one sweep of the upper
-    /// triangle (column j's entries add to y_i and to y_j).
+    /// triangle (column j's entries add to y_i and to y_j). From
+    /// [`PAR_PRODUCT_ENTRIES`] on, the columns are cut in two halves of
+    /// about equal entries swept on two threads: the first half's columns
+    /// touch only its own rows, the second's also the first's rows, which
+    /// it adds into a buffer of its own, added after (a fixed order: the
+    /// same bits whichever thread ends first).
     #[inline]
-    fn mul_vec_of(&self, x: &[f64], y: &mut [f64], f: impl Fn(f64) -> f64) {
+    fn mul_vec_of(&self, x: &[f64], y: &mut [f64], f: impl Fn(f64) -> f64 + Sync) {
         let p = &*self.pattern;
         assert!(x.len() == p.n && y.len() == p.n, "mul_vec: length mismatch");
         y.fill(0.0);
-        for j in 0..p.n {
+        if p.row_idx.len() < PAR_PRODUCT_ENTRIES {
+            self.sweep_columns(0..p.n, x, y, &mut [], &f);
+            return;
+        }
+        let half = p.row_idx.len() as u64 / 2;
+        let mid = p.col_ptr.partition_point(|&c| (c as u64) < half).min(p.n);
+        let (own_lo, own_hi) = y.split_at_mut(mid);
+        let mut lo_from_hi = vec![0.0; mid];
+        rayon::join(
+            || self.sweep_columns(0..mid, x, own_lo, &mut [], &f),
+            || self.sweep_columns(mid..p.n, x, own_hi, &mut lo_from_hi, &f),
+        );
+        own_lo
+            .iter_mut()
+            .zip(&lo_from_hi)
+            .for_each(|(a, b)| *a += b);
+    }
+
+    /// The columns `cols` of [`SparseSym::mul_vec_of`]'s sweep: into
+    /// `own` the rows of `cols`, into `below` the rows before them.
+    fn sweep_columns(
+        &self,
+        cols: std::ops::Range<usize>,
+        x: &[f64],
+        own: &mut [f64],
+        below: &mut [f64],
+        f: &impl Fn(f64) -> f64,
+    ) {
+        let p = &*self.pattern;
+        let start = cols.start;
+        for j in cols {
             let s = p.col_ptr[j] as usize;
             let e = p.col_ptr[j + 1] as usize;
             let xj = f(x[j]);
@@ -634,10 +676,13 @@ impl SparseSym {
             // the last entry of the column is the diagonal
             for (&i, &v) in p.row_idx[s..e - 1].iter().zip(&self.values[s..e - 1]) {
                 let (i, v) = (i as usize, f(v));
-                y[i] += v * xj;
+                match i.checked_sub(start) {
+                    Some(k) => own[k] += v * xj,
+                    None => below[i] += v * xj,
+                }
                 acc += v * f(x[i]);
             }
-            y[j] += acc + f(self.values[e - 1]) * xj;
+            own[j - start] += acc + f(self.values[e - 1]) * xj;
         }
     }
 

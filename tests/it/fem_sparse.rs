@@ -1045,6 +1045,44 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
     }
 }
 
+/// A product of a matrix past `PAR_PRODUCT_ENTRIES` (swept on two
+/// threads, its columns cut in two halves) equals the sum of its columns
+/// entry by entry, and the entrywise-absolute product too; the same bits on
+/// every call.
+#[test]
+fn products_on_two_threads_equal_the_columns_summed() {
+    let mut rng = Rng(47);
+    let g = grid([70, 70, 70], 1.0, 0.2, true, &mut rng);
+    let n = g.n_dofs();
+    let slots: Vec<Vec<u32>> = (0..g.elems.len()).map(|e| g.hex_dofs(e)).collect();
+    let pattern = Arc::new(Pattern::new(n, &slots));
+    assert!(pattern.nnz() >= groutready::fem::sparse::PAR_PRODUCT_ENTRIES);
+    let mut a = SparseSym::new(pattern);
+    for e in 0..g.elems.len() {
+        a.add_element(e, &conductivity(&g.hex(e), 2.0 * 86400.0).unwrap());
+    }
+    let x: Vec<f64> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+    let (mut y, mut y_abs) = (vec![0.0; n], vec![0.0; n]);
+    a.mul_vec(&x, &mut y);
+    a.abs_mul_vec(&x, &mut y_abs);
+    let (mut worst, mut worst_abs) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let (mut r, mut r_abs, mut size) = (0.0, 0.0, 0.0);
+        a.column(i, |j, v| {
+            r += v * x[j];
+            r_abs += v.abs() * x[j].abs();
+            size += (v * x[j]).abs();
+        });
+        worst = worst.max((y[i] - r).abs() / size.max(f64::MIN_POSITIVE));
+        worst_abs = worst_abs.max((y_abs[i] - r_abs).abs() / r_abs.max(f64::MIN_POSITIVE));
+    }
+    eprintln!("{n} rows: worst relative {worst:e}, absolute product {worst_abs:e}");
+    assert!(worst < 1e-14 && worst_abs < 1e-14);
+    let mut again = vec![0.0; n];
+    a.mul_vec(&x, &mut again);
+    assert_eq!(again, y);
+}
+
 /// A factor made on two cores and solved by sweeps on two cores, the
 /// elimination tree cut into two forests and the blocks above them
 /// (`fem::two_cores`), equals faer's to round-off, whole and in halves;
