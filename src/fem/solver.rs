@@ -413,10 +413,9 @@ impl CholeskySolver {
         let len = self.symbolic.len_val();
         if self.l_values.len() != len {
             self.l_values = Vec::new();
-            self.l_values
-                .try_reserve_exact(len)
-                .map_err(|_| SolveError::Faer(format!("out of memory for {len} factor entries")))?;
-            self.l_values.resize(len, 0.0);
+            self.l_values = zeroed(len).ok_or_else(|| {
+                SolveError::Faer(format!("out of memory for {len} factor entries"))
+            })?;
         }
         if let Some(p) = &self.permuted {
             p.place(matrix.values(), &mut self.placed)
@@ -548,23 +547,31 @@ impl CholeskySolver {
     /// One right-hand side solved by the two sweeps of `split`, permuted
     /// in and out.
     fn solve_on_two_cores(&self, split: &TwoCores, mut b: faer::ColMut<'_, f64>) {
-        let mut c: Vec<f64> = match self.symbolic.perm() {
-            Some(p) => p.arrays().0.iter().map(|&i| b[i as usize]).collect(),
-            None => (0..b.nrows()).map(|i| b[i]).collect(),
-        };
+        let mut c = self.permuted(|i| b[i]);
         split
             .sweep
             .sweep(&self.symbolic, &self.l_values, &mut c, true);
         split
             .sweep
             .sweep(&self.symbolic, &self.l_values, &mut c, false);
+        self.unpermute(&c, |i, v| b[i] = v);
+    }
+
+    /// P b, the vector `b` (the matrix's numbering, read by index) in the
+    /// factor's numbering.
+    fn permuted(&self, b: impl Fn(usize) -> f64) -> Vec<f64> {
         match self.symbolic.perm() {
-            Some(p) => {
-                for (k, &i) in p.arrays().0.iter().enumerate() {
-                    b[i as usize] = c[k];
-                }
-            }
-            None => (0..c.len()).for_each(|i| b[i] = c[i]),
+            Some(p) => p.arrays().0.iter().map(|&i| b(i as usize)).collect(),
+            None => (0..self.n()).map(b).collect(),
+        }
+    }
+
+    /// Pᵀ y: each entry of `y` (the factor's numbering) handed to `out`
+    /// with its index in the matrix's numbering.
+    fn unpermute(&self, y: &[f64], mut out: impl FnMut(usize, f64)) {
+        match self.symbolic.perm() {
+            Some(p) => (p.arrays().0.iter().zip(y)).for_each(|(&i, &v)| out(i as usize, v)),
+            None => y.iter().enumerate().for_each(|(i, &v)| out(i, v)),
         }
     }
 
@@ -649,10 +656,7 @@ impl CholeskySolver {
     pub fn forward_in_place(&self, b: &mut [f64]) -> Result<(), SolveError> {
         self.check_half(b, "right-hand side")?;
         let t = Instant::now();
-        let mut c: Vec<f64> = match self.symbolic.perm() {
-            Some(p) => p.arrays().0.iter().map(|&i| b[i as usize]).collect(),
-            None => b.to_vec(),
-        };
+        let mut c = self.permuted(|i| b[i]);
         self.triangle_solve(&mut c, true)?;
         b.copy_from_slice(&c);
         let seconds = t.elapsed().as_secs_f64();
@@ -672,14 +676,7 @@ impl CholeskySolver {
         let t = Instant::now();
         let mut y = c.to_vec();
         self.triangle_solve(&mut y, false)?;
-        match self.symbolic.perm() {
-            Some(p) => {
-                for (k, &i) in p.arrays().0.iter().enumerate() {
-                    c[i as usize] = y[k];
-                }
-            }
-            None => c.copy_from_slice(&y),
-        }
+        self.unpermute(&y, |i, v| c[i] = v);
         let seconds = t.elapsed().as_secs_f64();
         self.record(|s| s.solve_seconds += seconds);
         self.check_half(c, "solution")
@@ -931,6 +928,28 @@ pub fn relative_residual(matrix: &SparseSym, x: &[f64], b: &[f64]) -> f64 {
         r / nb
     } else {
         r
+    }
+}
+
+/// `len` zeros, or `None` where the memory is not there. Asked of the
+/// allocator as zeroed memory, so that a new block's pages are zeroed by
+/// the kernel where they are first written: for a large factor, inside
+/// the factorisation, by the thread that factorises each block (the
+/// two-core factorisation shares them out), rather than by one thread
+/// writing zeros over all of it first (the large complete dam's first
+/// factor: 2 GB, 3 s on one core of this virtual machine, whose fresh
+/// pages come from the host).
+fn zeroed(len: usize) -> Option<Vec<f64>> {
+    let layout = std::alloc::Layout::array::<f64>(len).ok()?;
+    if layout.size() == 0 {
+        return Some(Vec::new());
+    }
+    // SAFETY: a non-zero layout for `len` f64s; all-zero bytes are the
+    // f64 0.0, and the block is handed to a Vec of the same layout, whose
+    // drop frees it with the global allocator that made it.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout) as *mut f64;
+        (!p.is_null()).then(|| Vec::from_raw_parts(p, len, len))
     }
 }
 
