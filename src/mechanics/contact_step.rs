@@ -176,8 +176,18 @@ const NORMAL_SETTLED_FACTOR: f64 = 1e7;
 /// 56.9 against 55.7 s, the steps 91.5 against 104.4 s (and 123.3
 /// against 125.8 s for the whole command in a first pair); the demo's run
 /// 0 refactorisations past it against 2, its complete dam's step the
-/// same 10 (30 Nov 2026). `groutready study perf` prints what both cost.
-const CAPACITANCE_SOLVE_WEIGHT: f64 = 3.0;
+/// same 10 (30 Nov 2026). With the factorisation and the columns' batches
+/// on two cores (5 Dec 2026) the rates moved: on the large arch's days
+/// 856–862 the columns ran at 43.5 Gflop/s (246.9 Gflop estimated, 5.67 s)
+/// and the factorisations at 58.5 (1,181 Gflop, 20.2 s), so the weight is
+/// their ratio again, 1.3: the large complete dam's step corrects the
+/// 314 switches of its fourth round (rank 2,075: 114 Gflop of columns)
+/// instead of refactorising, 9 factorisations against 10, the same 122
+/// passes and final states, 68.6 against 72.5 s; the next pass past it
+/// (rank 2,722, 206 Gflop) still refactorises. The demo's run and its
+/// complete dam are the same at 1.3 and 3 (no choice near the break-even).
+/// `groutready study perf` prints what both cost.
+const CAPACITANCE_SOLVE_WEIGHT: f64 = 1.3;
 /// The same weight in the choice to solve the slip forces with the states
 /// (a border of the system, [`crate::fem::Coupling`]): its columns' cost
 /// against a factorisation's. Kept at the 5.5 of the break-even before
