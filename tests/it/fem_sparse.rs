@@ -162,6 +162,14 @@ fn assemble_both(g: &Grid, dt: f64, consistent: bool) -> (SparseSym, DMatrix<f64
     (a, d)
 }
 
+/// The unknowns and the elasticity matrix of a jittered, shuffled grid of
+/// unit cells of `size` (the setup of the factor's tests).
+fn elastic_grid(size: [usize; 3], rng: &mut Rng) -> (usize, SparseSym) {
+    let g = grid(size, 1.0, 0.2, true, rng);
+    let (a, _) = assemble_both(&g, 1.0, false);
+    (g.n_dofs(), a)
+}
+
 fn max_abs_diff(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     (a - b).amax()
 }
@@ -974,9 +982,7 @@ fn half_solves_compose_to_a_solve_and_reach_columns_equal_forward_halves() {
         ([18, 16, 14], Ordering::Metis, true),
     ] {
         let mut rng = Rng(41);
-        let g = grid(size, 1.0, 0.2, true, &mut rng);
-        let n = g.n_dofs();
-        let (a, _) = assemble_both(&g, 1.0, false);
+        let (n, a) = elastic_grid(size, &mut rng);
         let mut solver =
             CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
         let mut work = groutready::fem::ReachWork::default();
@@ -1093,9 +1099,7 @@ fn products_on_two_threads_equal_the_columns_summed() {
 #[test]
 fn factor_and_sweeps_on_two_cores_equal_faers() {
     let mut rng = Rng(43);
-    let g = grid([18, 16, 14], 1.0, 0.2, true, &mut rng);
-    let n = g.n_dofs();
-    let (a, _) = assemble_both(&g, 1.0, false);
+    let (n, a) = elastic_grid([18, 16, 14], &mut rng);
     let base: Vec<bool> = (0..n).map(|i| i % 97 == 0).collect();
     let mut m = a.clone();
     m.apply_dirichlet(&base);
@@ -1187,9 +1191,7 @@ fn reach_columns_products_block_by_block_equal_them_pair_by_pair() {
     use groutready::fem::half_solves::gram;
     for (size, ordering) in [([6, 5, 4], Ordering::Amd), ([18, 16, 14], Ordering::Metis)] {
         let mut rng = Rng(43);
-        let g = grid(size, 1.0, 0.2, true, &mut rng);
-        let n = g.n_dofs();
-        let (a, _) = assemble_both(&g, 1.0, false);
+        let (n, a) = elastic_grid(size, &mut rng);
         let mut solver =
             CholeskySolver::with_options(a.pattern().clone(), &ordering, faer::Par::Seq).unwrap();
         solver.factorize(&a).unwrap();
@@ -1278,9 +1280,7 @@ fn max_difference(x: &[f64], x_ref: &[f64]) -> (f64, f64) {
 #[test]
 fn capacitance_correction_of_changed_springs_equals_a_fresh_factorisation() {
     let mut rng = Rng(37);
-    let g = grid([6, 5, 4], 1.0, 0.2, true, &mut rng);
-    let n = g.n_dofs();
-    let (a, _) = assemble_both(&g, 1.0, false);
+    let (n, a) = elastic_grid([6, 5, 4], &mut rng);
     let scale = a.diag().iter().fold(0.0f64, |m, v| m.max(*v));
     // springs of the base on every 9th row, of the new matrix on every 6th
     // (some kept, some removed, some added), 10× the stiffest diagonal
