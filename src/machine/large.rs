@@ -56,7 +56,6 @@ mod linux {
     struct Kept {
         blocks: [(usize, usize); SLOTS],
         len: usize,
-        bytes: usize,
     }
 
     impl Kept {
@@ -64,8 +63,11 @@ mod linux {
             let block = self.blocks[i];
             self.blocks.copy_within(i + 1..self.len, i);
             self.len -= 1;
-            self.bytes -= block.1;
             block
+        }
+
+        fn bytes(&self) -> usize {
+            self.blocks[..self.len].iter().map(|b| b.1).sum()
         }
     }
 
@@ -74,7 +76,6 @@ mod linux {
     static KEPT: Mutex<Kept> = Mutex::new(Kept {
         blocks: [(0, 0); SLOTS],
         len: 0,
-        bytes: 0,
     });
 
     fn kept() -> std::sync::MutexGuard<'static, Kept> {
@@ -88,7 +89,7 @@ mod linux {
     /// Bytes kept for reuse now.
     #[cfg(test)]
     pub fn kept_bytes() -> usize {
-        kept().bytes
+        kept().bytes()
     }
 
     /// Unmaps every kept block (tests start from none).
@@ -135,20 +136,41 @@ mod linux {
             }
             return p as *mut u8;
         }
-        // SAFETY: growing a mapping of ours; the kernel may move it.
-        let q = unsafe { libc::mremap(p, old, len, libc::MREMAP_MAYMOVE) };
-        if q == libc::MAP_FAILED {
+        // SAFETY: growing a mapping of ours.
+        let Some(q) = (unsafe { remap(p as *mut u8, old, len) }) else {
             // SAFETY: on failure the old mapping is untouched and ours.
             unsafe { libc::munmap(p, old) };
             return fresh(len);
-        }
+        };
         if zeroed {
             // SAFETY: the first `old` bytes are the reused ones; the grown
             // tail is fresh, zeroed by the kernel.
-            unsafe { std::ptr::write_bytes(q as *mut u8, 0, old) };
+            unsafe { std::ptr::write_bytes(q, 0, old) };
         }
-        super::super::advise_huge_pages(q as *mut u8, len);
-        q as *mut u8
+        q
+    }
+
+    /// The mapping `p` of `old_len` bytes resized to `new_len`, its
+    /// contents kept (the kernel may move it), advised huge pages; `None`
+    /// (and `p` untouched) if the kernel cannot.
+    ///
+    /// # Safety
+    /// `p` is a mapping of ours of `old_len` bytes.
+    unsafe fn remap(p: *mut u8, old_len: usize, new_len: usize) -> Option<*mut u8> {
+        // SAFETY: the caller's.
+        let q = unsafe {
+            libc::mremap(
+                p as *mut libc::c_void,
+                old_len,
+                new_len,
+                libc::MREMAP_MAYMOVE,
+            )
+        };
+        if q == libc::MAP_FAILED {
+            return None;
+        }
+        super::super::advise_huge_pages(q as *mut u8, new_len);
+        Some(q as *mut u8)
     }
 
     fn fresh(len: usize) -> *mut u8 {
@@ -185,14 +207,13 @@ mod linux {
             n_unmap = 1;
         } else {
             let mut kept = kept();
-            while kept.len == SLOTS || kept.bytes + len > KEPT_MAX_BYTES {
+            while kept.len == SLOTS || kept.bytes() + len > KEPT_MAX_BYTES {
                 unmap[n_unmap] = kept.remove(0);
                 n_unmap += 1;
             }
             let n = kept.len;
             kept.blocks[n] = (p as usize, len);
             kept.len += 1;
-            kept.bytes += len;
         }
         for &(q, l) in &unmap[..n_unmap] {
             // SAFETY: a mapping of ours that no one holds any more.
@@ -211,20 +232,8 @@ mod linux {
         if old_len == new_len {
             return p;
         }
-        // SAFETY: resizing a mapping of ours, its contents kept.
-        let q = unsafe {
-            libc::mremap(
-                p as *mut libc::c_void,
-                old_len,
-                new_len,
-                libc::MREMAP_MAYMOVE,
-            )
-        };
-        if q == libc::MAP_FAILED {
-            return std::ptr::null_mut();
-        }
-        super::super::advise_huge_pages(q as *mut u8, new_len);
-        q as *mut u8
+        // SAFETY: `p` is a mapping of ours of `old_len` bytes.
+        unsafe { remap(p, old_len, new_len) }.unwrap_or(std::ptr::null_mut())
     }
 }
 
