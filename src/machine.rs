@@ -61,11 +61,11 @@ pub fn lower_this_threads_priority() {
 }
 
 /// Blocks of this size or more are mapped by glibc for themselves (the
-/// largest threshold `mallopt` takes on 64-bit Linux) [bytes].
+/// largest threshold `mallopt` takes on 64-bit Linux) \[bytes\].
 const MAPPED_FROM_BYTES: usize = 32 << 20;
 
 /// Transparent huge pages come in this size on x86-64 and most aarch64
-/// kernels [bytes]: the allocator advises them on blocks of this size or
+/// kernels \[bytes\]: the allocator advises them on blocks of this size or
 /// more.
 const HUGE_PAGE_BYTES: usize = 2 << 20;
 
@@ -178,18 +178,18 @@ fn advise_huge_pages(p: *mut u8, size: usize) {
     }
 }
 
-/// The machine's physical memory [bytes] (`MemTotal` of `/proc/meminfo`).
+/// The machine's physical memory \[bytes\] (`MemTotal` of `/proc/meminfo`).
 pub fn total_memory_bytes() -> Option<u64> {
     proc_field("/proc/meminfo", "MemTotal:").map(|kib| 1024 * kib)
 }
 
-/// The process's peak resident memory so far [bytes] (`VmHWM`).
+/// The process's peak resident memory so far \[bytes\] (`VmHWM`).
 pub fn peak_memory_bytes() -> Option<u64> {
     proc_field("/proc/self/status", "VmHWM:").map(|kib| 1024 * kib)
 }
 
 /// The CPU time this process has used so far, user and system over all
-/// its threads [s] (`getrusage`): beside the wall time, how much of the
+/// its threads \[s\] (`getrusage`): beside the wall time, how much of the
 /// cores a run kept busy (`groutready study perf`).
 pub fn cpu_seconds() -> Option<f64> {
     #[cfg(unix)]
@@ -217,7 +217,7 @@ fn proc_field(path: &str, key: &str) -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// A lower bound of the memory a simulation of a mesh needs [bytes], to
+/// A lower bound of the memory a simulation of a mesh needs \[bytes\], to
 /// refuse before building what cannot fit. Per element: the mesh and the
 /// thermal tables (about 0.5 KB); with mechanics, the unit stiffness (4.6
 /// KB), the Gauss data and the stress and creep state (about 8 KB more).

@@ -10,7 +10,7 @@ use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Longest interval between two log lines [s]: the Xiaowan-like arch's
+/// Longest interval between two log lines \[s\]: the Xiaowan-like arch's
 /// tenths are 35–60 min apart.
 pub const LOG_EVERY_SECONDS: f64 = 600.0;
 

@@ -46,7 +46,7 @@ use crate::sim::checkpoint::{read_file, write_file};
 use crate::sim::{Checkpoint, Simulation};
 use crate::vocab::Day;
 
-/// Least wall time between two kept restart points [s]: a Xiaowan-scale
+/// Least wall time between two kept restart points \[s\]: a Xiaowan-scale
 /// checkpoint and history are a few hundred MB, written in a second or two.
 pub const SAVE_EVERY_SECONDS: f64 = 120.0;
 

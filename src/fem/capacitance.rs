@@ -22,7 +22,7 @@
 //! [ E_Nᵀ     0       0  ] [ λ ]   [p_N]
 //! ```
 //!
-//! With U = [A[f₀,R], E_N] (m = |R| + |N| columns, zero on F₀) and
+//! With U = [A\[f₀,R\], E_N] (m = |R| + |N| columns, zero on F₀) and
 //! eliminating x_f, what is left is the m × m capacitance system
 //!
 //! ```text
@@ -83,7 +83,7 @@
 //! its blocks are in N/m and m/N, twenty orders apart on concrete
 //! ([`EquilibratedLu`]). Its
 //! factor is kept while the changed rows and the entries of A that S reads
-//! (A[R,R] and the diagonal changes) stay the same: the refinements and the
+//! (A\[R,R\] and the diagonal changes) stay the same: the refinements and the
 //! passes that move only loads (a slip-force round) reuse it, where m³/3
 //! per pass dominated the complete Xiaowan-like dam (thousands of changed
 //! rows). The columns of Y and
@@ -312,7 +312,7 @@ pub struct CapacitanceStats {
     /// rows of their systems (what dense columns would hold)
     #[serde(default)]
     pub column_dense_rows: u64,
-    /// wall time of the columns [s] (in `seconds` too)
+    /// wall time of the columns \[s\] (in `seconds` too)
     #[serde(default)]
     pub column_seconds: f64,
     /// forward halves of an application computed as the last full one
@@ -324,12 +324,12 @@ pub struct CapacitanceStats {
     #[serde(default)]
     pub s_factorisations: u64,
     /// flops of those factorisations (m³ · 2/3 each) and their wall time
-    /// with S's assembly [s] (in `seconds` too)
+    /// with S's assembly \[s\] (in `seconds` too)
     #[serde(default)]
     pub s_flops: f64,
     #[serde(default)]
     pub s_seconds: f64,
-    /// wall time of the products YᵢᵀYⱼ computed block by block [s] (in
+    /// wall time of the products YᵢᵀYⱼ computed block by block \[s\] (in
     /// `s_seconds` too)
     #[serde(default)]
     pub product_seconds: f64,
@@ -343,7 +343,7 @@ pub struct CapacitanceStats {
     pub max_rank: usize,
     /// refinements on the residual
     pub refinements: u64,
-    /// wall time of the corrections [s]
+    /// wall time of the corrections \[s\]
     pub seconds: f64,
 }
 
@@ -962,7 +962,7 @@ impl Capacitance {
         self.stats.product_seconds += t.elapsed().as_secs_f64();
     }
 
-    /// The entries of A that S reads besides the cached products: A[R,R]
+    /// The entries of A that S reads besides the cached products: A\[R,R\]
     /// (each released row's entries in released columns, in dof order),
     /// δ of each diagonal change and each coupling's reaction row in the
     /// released columns. With the changed rows and the couplings they
@@ -1041,7 +1041,7 @@ impl Capacitance {
     ///     [ Y_VᵀY_U − V_Rᵀ     I − Y_VᵀY_G   ]
     /// ```
     ///
-    /// D = [[A[R,R], 0], [0, 0]] − diag(1/δ_D); G the couplings' loads
+    /// D = [[A\[R,R\], 0], [0, 0]] − diag(1/δ_D); G the couplings' loads
     /// (Y_G from the unit columns of their rows free in the base, G_R their
     /// entries on released rows), V their reaction rows (Y_V the released
     /// column of each, V_R its entries in released columns).

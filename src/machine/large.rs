@@ -26,7 +26,7 @@
 
 use super::{Layout, HUGE_PAGE_BYTES};
 
-/// Blocks of this size or more are mapped here [bytes]: glibc's own
+/// Blocks of this size or more are mapped here \[bytes\]: glibc's own
 /// mapping threshold ([`super::MAPPED_FROM_BYTES`]), below which its heap
 /// keeps what is freed.
 pub const KEPT_FROM_BYTES: usize = super::MAPPED_FROM_BYTES;

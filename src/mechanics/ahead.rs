@@ -96,12 +96,12 @@ use super::joints::JointPointState;
 use super::live::{LiveSystem, PARALLEL_FROM_DOFS};
 use crate::vocab::ZoneId;
 
-/// The largest factor [bytes] a second copy is kept of: two factors of the
+/// The largest factor \[bytes\] a second copy is kept of: two factors of the
 /// complete Xiaowan-like arch (324M entries, 2.6 GB each) would pass its
 /// 8 GB budget with the capacitance columns and the model.
 const AHEAD_MAX_BYTES: usize = 3 << 29;
 
-/// A wait for the factor made ahead longer than this [s] says the other
+/// A wait for the factor made ahead longer than this \[s\] says the other
 /// core is the busier one ([`FactorAhead::births_here`]).
 const BUSY_WAIT: f64 = 1e-3;
 
@@ -135,15 +135,15 @@ pub struct AheadStats {
     /// factorisations (or analyses of the next live system) that failed
     /// (the step then rebuilds or factorises itself and reports the error)
     pub failed: usize,
-    /// wall time of the factorisations ahead, on the second core [s]
+    /// wall time of the factorisations ahead, on the second core \[s\]
     pub seconds: f64,
     /// wall time of the next live systems' analyses and K̃ (lifts poured
     /// at the next step's start) made on threads of their own from their
     /// orders (those made on the step's thread count as its symbolic
-    /// time) [s]
+    /// time) \[s\]
     #[serde(default)]
     pub seconds_analysed: f64,
-    /// time the step waited for a factorisation ahead to finish [s]
+    /// time the step waited for a factorisation ahead to finish \[s\]
     pub seconds_waited: f64,
     /// of those made, started while the one before was still running
     /// (its step waiting for it): two at once
@@ -167,7 +167,7 @@ pub struct FactorAhead {
     /// waits for its own, so two run at once while it waits
     running: VecDeque<JoinHandle<Done>>,
     ready: Option<Made>,
-    /// how long the last step waited for its factor made ahead [s]
+    /// how long the last step waited for its factor made ahead \[s\]
     last_waited: f64,
     placement: BirthsPlacement,
     pub stats: AheadStats,
@@ -265,7 +265,7 @@ pub struct Analysed {
     pub assembled: Assembled,
     pub prepared: Prepared,
     /// wall time of the analysis and assembly on a thread of its own (0
-    /// when made on the step's thread) [s]
+    /// when made on the step's thread) \[s\]
     pub seconds: f64,
 }
 

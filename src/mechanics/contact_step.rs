@@ -1,5 +1,5 @@
 //! The joint problem of one mechanical step, in the unknowns of
-//! [`LiveSystem`](super::live::LiveSystem): node displacements ũ and the
+//! [`LiveSystem`]: node displacements ũ and the
 //! relative displacement d = R(u_b − u_a) of every live pair.
 //!
 //! The step's equilibrium is
@@ -195,7 +195,7 @@ const CAPACITANCE_SOLVE_WEIGHT: f64 = 1.3;
 /// couples sooner and takes 73 passes against 66 (2.50 against 1.97 s);
 /// the large arch's days 856–862 couple alike at either.
 const COUPLING_SOLVE_WEIGHT: f64 = 5.5;
-/// Memory the capacitance columns of one step may hold [bytes]; above it
+/// Memory the capacitance columns of one step may hold \[bytes\]; above it
 /// the step refactorises.
 const CAPACITANCE_MAX_BYTES: usize = 1 << 30;
 
@@ -208,11 +208,11 @@ pub struct JointSolveSettings {
     pub mu_kinetic: f64,
     /// passes (active set) or cracking rounds × fixed-point solves (qp) per step
     pub max_iterations: usize,
-    /// a gap below −gap_tolerance closes an open point [m]
+    /// a gap below −gap_tolerance closes an open point \[m\]
     pub gap_tolerance: f64,
     /// forces are compared to force_tolerance × the step's force scale
     pub force_tolerance: f64,
-    /// tensile strength of a grout layer [Pa]
+    /// tensile strength of a grout layer \[Pa\]
     pub bond_strength: f64,
     /// active set: a pass whose constrained rows differ from the factor's
     /// is solved by the capacitance correction (exact) instead of a new
@@ -247,7 +247,7 @@ pub struct JointStepOutcome {
     pub factorizations: usize,
     pub solves: usize,
     pub seconds_numeric: f64,
-    /// largest tension [Pa] left on a point kept closed by the flip limit
+    /// largest tension \[Pa\] left on a point kept closed by the flip limit
     pub kept_closed_tension: f64,
     /// the step's normal states switched by [`BlockPivoting`]
     pub block_pivoting: bool,
@@ -748,11 +748,11 @@ struct ActiveSet {
     pivoting: Option<BlockPivoting>,
     /// false once the step has restarted without [`BlockPivoting`]
     may_pivot: bool,
-    /// force below which a reaction counts as zero [N]
+    /// force below which a reaction counts as zero \[N\]
     tol_f: f64,
     /// the step's force tolerance (relative)
     force_tolerance: f64,
-    /// gap below which an open point closes [m]
+    /// gap below which an open point closes \[m\]
     tol_g: f64,
     frictionless: bool,
     anderson: Anderson,

@@ -446,7 +446,7 @@ pub(super) struct ElementTables {
     pub(super) density: Vec<f64>,
     /// concrete (ageing, creeping) or rock (elastic)
     pub(super) concrete: Vec<bool>,
-    /// the rock's modulus (0 without rock elements) [Pa]
+    /// the rock's modulus (0 without rock elements) \[Pa\]
     pub(super) rock_modulus: f64,
 }
 

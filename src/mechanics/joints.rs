@@ -22,7 +22,7 @@ pub struct JointPoint {
     pub a: u32,
     pub b: u32,
     pub frame: LocalFrame,
-    /// tributary area [m²]
+    /// tributary area \[m²\]
     pub area: f64,
 }
 
@@ -31,11 +31,11 @@ pub struct JointPoint {
 pub struct JointPointState {
     /// both nodes exist
     pub paired: bool,
-    /// Normal opening [m]. Before grouting: the contact gap (≥ 0 up to solver
+    /// Normal opening \[m\]. Before grouting: the contact gap (≥ 0 up to solver
     /// tolerance). After grouting: the opening since grouting (negative when
     /// the grout layer is compressed; ≥ 0 again once the layer has cracked).
     pub gap: f64,
-    /// total force on side B in the local frame (t1, t2, n) [N]; n > 0 presses
+    /// total force on side B in the local frame (t1, t2, n) \[N\]; n > 0 presses
     pub force: [f64; 3],
     pub state: PointState,
     /// direction (t1, t2) of the friction force while the point slips
@@ -54,7 +54,7 @@ impl JointPointState {
         grout: None,
     };
 
-    /// Joint opening a joint meter set at the pour would read [m]: the gap
+    /// Joint opening a joint meter set at the pour would read \[m\]: the gap
     /// before grouting, the aperture grouted plus the opening since after.
     pub fn aperture(&self) -> f64 {
         match &self.grout {
@@ -82,9 +82,9 @@ impl JointPointState {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Grout {
     pub day: f64,
-    /// aperture filled by the grout [m]
+    /// aperture filled by the grout \[m\]
     pub aperture: f64,
-    /// layer thickness: the aperture, at least the scene's floor [m]
+    /// layer thickness: the aperture, at least the scene's floor \[m\]
     pub thickness: f64,
     /// spring of the point in the local frame (t1, t2, n) [N/m]
     pub stiffness: [f64; 3],

@@ -219,5 +219,5 @@ impl LayerMerge {
     }
 }
 
-/// A node is on a zone boundary's elevation within this [m].
+/// A node is on a zone boundary's elevation within this \[m\].
 const LEVEL_TOLERANCE: f64 = 1e-6;

@@ -70,10 +70,10 @@ impl Supports {
 /// set there would show.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointReading {
-    /// aperture [m]
+    /// aperture \[m\]
     pub aperture: f64,
     pub state: JointState,
-    /// pressure across the joint [Pa], compression positive: the contact
+    /// pressure across the joint \[Pa\], compression positive: the contact
     /// pressure of a closed joint, the grout layer's (negative in tension)
     /// once grouted, 0 where open. The joint points' normal forces over
     /// their tributary areas ([`MechanicsModel::joint_pressure`]),
@@ -101,21 +101,21 @@ pub struct MechStats {
     pub symbolic: usize,
     /// numeric factorisations, the contact solves' included
     pub numeric: usize,
-    /// largest live system [dofs], supported ones included
+    /// largest live system \[dofs\], supported ones included
     pub max_dofs: usize,
     /// largest number of free (not supported) dofs of a live system
     #[serde(default)]
     pub max_free_dofs: usize,
-    /// wall time of the rebuilds [s] (orderings included)
+    /// wall time of the rebuilds \[s\] (orderings included)
     pub seconds_symbolic: f64,
     /// METIS calls: one per live set with `solver.ordering = "metis_live_set"`,
     /// one for the whole construction with `"metis"`
     #[serde(default)]
     pub metis_calls: usize,
-    /// wall time of the elimination orders (METIS, restrictions) [s]
+    /// wall time of the elimination orders (METIS, restrictions) \[s\]
     #[serde(default)]
     pub seconds_ordering: f64,
-    /// wall time of faer's symbolic analyses in those orders [s]
+    /// wall time of faer's symbolic analyses in those orders \[s\]
     #[serde(default)]
     pub seconds_analysis: f64,
     /// Σ over the live sets of the entries of L
@@ -127,11 +127,11 @@ pub struct MechStats {
     /// Σ over the numeric factorisations of their flops (the work done)
     #[serde(default)]
     pub numeric_flops: f64,
-    /// wall time of the numeric factorisations [s]
+    /// wall time of the numeric factorisations \[s\]
     pub seconds_numeric: f64,
-    /// wall time of the solves without joints [s]
+    /// wall time of the solves without joints \[s\]
     pub seconds_solve: f64,
-    /// wall time of the assembly [s]
+    /// wall time of the assembly \[s\]
     pub seconds_assembly: f64,
     /// contact solves of the joints
     pub seconds_joints: f64,
@@ -141,7 +141,7 @@ pub struct MechStats {
     /// fixed point of the slipping points not solved with the states)
     #[serde(default)]
     pub slip_force_passes: usize,
-    /// largest tension [Pa] left on a joint point kept closed by the flip limit
+    /// largest tension \[Pa\] left on a joint point kept closed by the flip limit
     pub kept_closed_tension: f64,
     /// steps whose normal contact states switched by block pivoting
     /// (frictional points cycling; `contact_step::BlockPivoting`)
@@ -168,14 +168,14 @@ pub struct MechStats {
     /// ([`super::rock_condensation`]; not counted in `max_dofs`)
     #[serde(default)]
     pub condensed_dofs: usize,
-    /// wall time of that condensation [s]
+    /// wall time of that condensation \[s\]
     #[serde(default)]
     pub seconds_condensation: f64,
     /// solves with the condensed rock's factor (a step's loads condensed
     /// when the rock is loaded, its x_R recovered)
     #[serde(default)]
     pub rock_solves: usize,
-    /// wall time of the steps' condensing and recovering [s]
+    /// wall time of the steps' condensing and recovering \[s\]
     #[serde(default)]
     pub seconds_rock: f64,
     /// most nodes layer merging tied in a live system
@@ -224,25 +224,25 @@ impl MechStats {
 /// Checkpointable mechanical state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MechState {
-    /// displacement accumulated since each node's birth, 3 per node [m]
+    /// displacement accumulated since each node's birth, 3 per node \[m\]
     pub u: Vec<f64>,
     /// per element: born (poured, or rock)
     pub live: Vec<bool>,
     /// per element: day it was born (NaN before)
     pub birth_day: Vec<f64>,
-    /// per element and Gauss point [Pa]
+    /// per element and Gauss point \[Pa\]
     pub stress: Vec<[[f64; 6]; 8]>,
     /// per element × 8 Gauss points when creep is on
     pub creep: Vec<CreepState>,
-    /// external load accumulated so far, per dof [N]
+    /// external load accumulated so far, per dof \[N\]
     pub f_ext: Vec<f64>,
-    /// water load applied so far, per dof [N]
+    /// water load applied so far, per dof \[N\]
     pub water_load: Vec<f64>,
     /// per element: its weight is in `f_ext` (the rock's never strains it)
     pub weight_applied: Vec<bool>,
     /// one per joint contact point (empty without the `joints` effect)
     pub joints: Vec<JointPointState>,
-    /// nodal forces of the joint contacts, per dof [N] (total, not incremental)
+    /// nodal forces of the joint contacts, per dof \[N\] (total, not incremental)
     pub f_contact: Vec<f64>,
     /// what the factor made ahead for the next step was guessed from, if
     /// one was made: a run restarted here factorises its first step from
@@ -1318,8 +1318,8 @@ impl MechanicsModel {
 
     /// The two parts of [`equilibrium_residual`](Self::equilibrium_residual):
     /// the residual norm ‖Σ Bᵀσ − f_ext − f_contact‖ over the free live dofs
-    /// [N] and the scale it is divided by (‖f_ext + f_contact‖, or the
-    /// largest internal nodal force when that is larger; never 0) [N]. In a
+    /// \[N\] and the scale it is divided by (‖f_ext + f_contact‖, or the
+    /// largest internal nodal force when that is larger; never 0) \[N\]. In a
     /// state that nothing loads (blocks contracting freely) both are
     /// round-off and their ratio means nothing: a caller that knows the
     /// load that strained the model (E·α·ΔT over a section) divides by that
@@ -1389,7 +1389,7 @@ impl MechanicsModel {
         })
     }
 
-    /// Pressure across the joint [Pa] at joint point `p`, compression
+    /// Pressure across the joint \[Pa\] at joint point `p`, compression
     /// positive: its normal force (which presses side B when positive) over
     /// its tributary area; exact for a uniform traction on the bilinear
     /// joint faces.
@@ -1497,7 +1497,7 @@ fn takes_grout(pt: &JointPoint, st: &JointPointState, zone: ZoneId) -> bool {
     pt.joint == zone.joint && pt.zone == zone.zone && st.paired && st.grout.is_none()
 }
 
-/// [`CondensedRock::condense`]'s y = A_RR⁻¹ b_R, when the rock is condensed.
+/// [`super::rock_condensation::CondensedRock::condense`]'s y = A_RR⁻¹ b_R, when the rock is condensed.
 type Condensed = Option<Vec<f64>>;
 
 /// A step's prescribed increments: over the system's unknowns, and the

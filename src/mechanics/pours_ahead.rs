@@ -42,7 +42,7 @@ pub struct PoursAheadStats {
     /// replaced by another before a step took them (the next live set
     /// turned out otherwise)
     pub discarded: usize,
-    /// their wall time on their threads [s]
+    /// their wall time on their threads \[s\]
     pub seconds: f64,
 }
 
@@ -64,7 +64,7 @@ struct Pending {
 pub struct PoursAhead {
     enabled: bool,
     pending: Option<Pending>,
-    /// wall time of the analyses on their threads [ns], added by them
+    /// wall time of the analyses on their threads \[ns\], added by them
     nanos: Arc<AtomicU64>,
     stats: PoursAheadStats,
 }

@@ -106,7 +106,7 @@ pub struct RockElements<'a> {
     pub rock: &'a [bool],
     /// the unit-modulus stiffness of each element
     pub k_unit: &'a [crate::fem::elasticity::PackedSym24],
-    /// the rock's modulus [Pa]
+    /// the rock's modulus \[Pa\]
     pub modulus: f64,
     /// supported global node dofs
     pub supported: &'a [bool],

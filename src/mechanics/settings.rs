@@ -17,7 +17,7 @@ pub const NO_THERMAL_EXPANSION: f64 = 0.0;
 /// The dam concrete.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConcreteMechanics {
-    /// Ageing elastic modulus E(τ) [Pa], τ the age in days.
+    /// Ageing elastic modulus E(τ) \[Pa\], τ the age in days.
     pub modulus: ModulusLaw,
     /// Poisson's ratio ν [-], constant in time.
     pub poisson: f64,
@@ -35,7 +35,7 @@ pub struct ConcreteMechanics {
 /// The foundation rock: elastic, not ageing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RockMechanics {
-    /// Elastic modulus E [Pa].
+    /// Elastic modulus E \[Pa\].
     pub modulus_pa: f64,
     /// Poisson's ratio ν [-].
     pub poisson: f64,
@@ -58,20 +58,20 @@ pub struct JointMechanics {
     pub mu_static: f64,
     /// Kinetic Coulomb coefficient μ_k ≤ μ_s [-].
     pub mu_kinetic: f64,
-    /// Gap of a joint point when its second block is poured [m].
+    /// Gap of a joint point when its second block is poured \[m\].
     pub initial_gap_m: f64,
-    /// Normal modulus E_z of the grout layer [Pa].
+    /// Normal modulus E_z of the grout layer \[Pa\].
     pub grout_modulus_pa: f64,
-    /// Shear modulus G_x = G_y of the grout layer [Pa].
+    /// Shear modulus G_x = G_y of the grout layer \[Pa\].
     pub grout_shear_modulus_pa: f64,
-    /// Thinnest grout layer [m]: a smaller aperture is grouted this thick.
+    /// Thinnest grout layer \[m\]: a smaller aperture is grouted this thick.
     pub grout_min_thickness_m: f64,
-    /// Tensile bond strength of a grouted point [Pa]; above it the layer cracks.
+    /// Tensile bond strength of a grouted point \[Pa\]; above it the layer cracks.
     pub bond_strength_pa: f64,
     /// Capacitance correction of contact-set changes (`solver.contact_capacitance`).
     pub capacitance: bool,
     /// Distance of the grout stops from the upstream and downstream faces
-    /// [m], along the joint face: the zone minimum is read inside them
+    /// \[m\], along the joint face: the zone minimum is read inside them
     /// ([`super::grout_stops`]); None: at the joint nodes off the faces.
     pub grout_stop_inset_m: Option<f64>,
 }

@@ -60,7 +60,7 @@
 //! below — their count per direction the least that reaches the margin (or
 //! the depth); `rock_layers` and `rock_margin_elements` are then not used.
 //! Which far face of this rock faces which side is
-//! [`super::far::DamFrame::side`]'s rule.
+//! [`super::far::DamFrame::face_reading`]'s rule.
 //!
 //! Since every node of a level k has
 //! the same z, each hex's corner Jacobian is Δz times the signed area of its

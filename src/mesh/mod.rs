@@ -152,7 +152,7 @@ pub struct BlockInfo {
     pub n_lifts: u32,
     /// Global layer index of the bottom layer of lift 1 (0 = lowest concrete layer of the dam).
     pub base_layer: u32,
-    /// Elevation of the block's base [m].
+    /// Elevation of the block's base \[m\].
     pub foundation_z: f64,
 }
 
@@ -253,7 +253,7 @@ pub struct Mesh {
     pub n_thermal_dofs: usize,
     /// Elevations of the concrete layer boundaries, len = n_layers + 1.
     pub layer_z: Vec<f64>,
-    /// Nominal lift height [m] (the arch's crest lift absorbs the remainder of the height).
+    /// Nominal lift height \[m\] (the arch's crest lift absorbs the remainder of the height).
     pub lift_height: f64,
     /// Lifts per grouting zone.
     pub zone_lifts: u32,
@@ -270,7 +270,7 @@ pub struct Mesh {
     pub zone_points: Vec<ZoneSite>,
     /// Faces on the outer boundary of the complete mesh.
     pub surfaces: Vec<SurfaceFace>,
-    /// Elevation of the crest [m].
+    /// Elevation of the crest \[m\].
     pub crest_z: f64,
     /// Unit vector pointing upstream, `[0, −1, 0]`.
     pub upstream_normal_hint: [f64; 3],
@@ -788,7 +788,7 @@ impl Mesh {
     }
 }
 
-/// Distance [m] within which two joint nodes (or two elevations) are the same.
+/// Distance \[m\] within which two joint nodes (or two elevations) are the same.
 const COINCIDENT_M: f64 = 1e-9;
 
 fn invalid<T>(m: String) -> Result<T, MeshError> {

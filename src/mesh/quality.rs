@@ -47,7 +47,7 @@ fn coords(nodes: &[[f64; 3]], hex: &[u32; 8]) -> [[f64; 3]; 8] {
     std::array::from_fn(|k| nodes[hex[k] as usize])
 }
 
-/// The smallest Jacobian determinant [m³] over all element corners, with
+/// The smallest Jacobian determinant \[m³\] over all element corners, with
 /// its element and corner; `None` without elements.
 pub fn min_jacobian(nodes: &[[f64; 3]], hexes: &[[u32; 8]]) -> Option<Worst> {
     let mut worst: Option<Worst> = None;

@@ -318,7 +318,7 @@ pub(super) struct Together {
 }
 
 /// One evaluated grid point: its margins (two per zone), whether every
-/// zone passed, and the deciding apertures [mm].
+/// zone passed, and the deciding apertures \[mm\].
 pub(super) struct Point {
     k: Vec<u32>,
     m: Vec<f64>,

@@ -15,7 +15,7 @@
 //!   a least-cost linear program, verified by re-simulation;
 //! - [`whatif`]: one zone's remedy of the engineer's choosing, re-simulated
 //!   the same way (the TUI's what-if);
-//! - [`plan`]: all of it for one scene and schedules, into a [`Plan`]
+//! - [`plan()`]: all of it for one scene and schedules, into a [`Plan`]
 //!   ([`readiness`]) that the reports and the TUI read.
 //!
 //! Verified by: `tests/it/restart.rs` (a restarted run equals an uninterrupted

@@ -58,7 +58,7 @@ pub struct RuleCheck {
     pub reason: Option<String>,
 }
 
-/// Apertures of a zone on one date [mm]; None where the zone's two blocks do
+/// Apertures of a zone on one date \[mm\]; None where the zone's two blocks do
 /// not both exist yet.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Apertures {
@@ -69,7 +69,7 @@ pub struct Apertures {
 }
 
 impl Apertures {
-    /// The aperture at `point` [mm].
+    /// The aperture at `point` \[mm\].
     pub fn at(&self, point: ZonePoint) -> Option<f64> {
         match point {
             ZonePoint::Upstream => self.upstream,
@@ -122,9 +122,9 @@ pub struct ZoneReadiness {
     pub temp_a_c: Option<f64>,
     pub temp_b_c: Option<f64>,
     pub closure_temp_c: f64,
-    /// age of the zone's youngest lift on the planned date [days]
+    /// age of the zone's youngest lift on the planned date \[days\]
     pub age_days: Option<f64>,
-    /// least height of concrete above the zone's top over both blocks [m];
+    /// least height of concrete above the zone's top over both blocks \[m\];
     /// None where both blocks are complete (the rule is waived)
     pub cover_m: Option<f64>,
     pub checks: Vec<RuleCheck>,
@@ -155,7 +155,7 @@ impl ZoneReadiness {
 pub struct SupercoolOption {
     /// lowering of the cooling target [°C]
     pub delta_c: f64,
-    /// aperture at the deciding point on the planned date with it [mm]
+    /// aperture at the deciding point on the planned date with it \[mm\]
     pub aperture_mm: f64,
     /// set when the supercooling was chosen together with neighbouring
     /// zones (`planner::joint_remedy`): at less cost than zone by zone, or,
@@ -195,7 +195,7 @@ fn held() -> bool {
 pub struct DelayOption {
     pub days: u32,
     pub date: NaiveDate,
-    /// aperture at the deciding point on the new date [mm]
+    /// aperture at the deciding point on the new date \[mm\]
     pub aperture_mm: f64,
     /// zones above on the same joint that move with it (bottom-up order)
     pub also_delayed: Vec<u32>,
@@ -268,7 +268,7 @@ pub struct ZoneHistory {
     pub zone: u32,
     pub planned: NaiveDate,
     pub dates: Vec<NaiveDate>,
-    /// [mm] per date
+    /// \[mm\] per date
     pub upstream: Vec<Option<f64>>,
     pub center: Vec<Option<f64>>,
     pub downstream: Vec<Option<f64>>,

@@ -69,7 +69,7 @@ impl<'h> HistoryIndex<'h> {
         rows.binary_search_by(|r| r.0.cmp(&day)).ok()
     }
 
-    /// Apertures of a zone on a recorded day [mm].
+    /// Apertures of a zone on a recorded day \[mm\].
     pub fn apertures(&self, zone: ZoneId, day: Day) -> Apertures {
         let mm = |p| self.sample(zone, day, p).map(|s| s.aperture * 1e3);
         Apertures {
@@ -165,7 +165,7 @@ impl<'a> Rules<'a> {
             .collect();
     }
 
-    /// The deciding aperture of a zone on a day [mm].
+    /// The deciding aperture of a zone on a day \[mm\].
     pub fn deciding_aperture(&self, h: &HistoryIndex, zone: ZoneId, day: Day) -> Option<f64> {
         h.apertures(zone, day).at(self.settings.aperture_point)
     }
@@ -322,7 +322,7 @@ impl<'a> Rules<'a> {
         }
     }
 
-    /// The age of the zone's youngest lift (both blocks) on `day` [days];
+    /// The age of the zone's youngest lift (both blocks) on `day` \[days\];
     /// None before every lift is poured.
     fn youngest_age(&self, ext: Option<&ZoneExtent>, day: Day) -> Option<f64> {
         let youngest = ext.and_then(|e| {

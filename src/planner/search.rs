@@ -1120,7 +1120,7 @@ const DELAY_STOP_CHECK_DAYS: i64 = 5;
 enum DelayDay {
     /// groutable after `days` of delay, on `day`, with the zones above on
     /// the same joint planned before it (they move with it) and the
-    /// deciding aperture then [mm]
+    /// deciding aperture then \[mm\]
     Found {
         days: u32,
         day: Day,

@@ -39,7 +39,7 @@ pub fn series(meters: &[MeterComparison]) -> Vec<MeterSeries<'_>> {
         .collect()
 }
 
-/// Error statistics of the meters of one joint [mm].
+/// Error statistics of the meters of one joint \[mm\].
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeterError {
     pub joint: u32,

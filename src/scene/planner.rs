@@ -10,9 +10,9 @@ use crate::vocab::{Invalid, ZonePoint};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerSettings {
-    /// Least aperture that takes grout [mm]; default 0.5.
+    /// Least aperture that takes grout \[mm\]; default 0.5.
     pub min_aperture_mm: f64,
-    /// Groutable zones below this aperture are reported as marginal [mm];
+    /// Groutable zones below this aperture are reported as marginal \[mm\];
     /// default 0.7.
     pub marginal_aperture_mm: f64,
     /// Which point decides the aperture rule: `min` (default), `upstream`,
@@ -26,10 +26,10 @@ pub struct PlannerSettings {
     pub closure_temp_profile: Vec<[f64; 2]>,
     /// A block passes the temperature rule at closure + this [°C]; default 1.
     pub closure_tolerance_c: f64,
-    /// Least concrete age of the zone's youngest lift at grouting [days];
+    /// Least concrete age of the zone's youngest lift at grouting \[days\];
     /// default 90.
     pub min_age_days: f64,
-    /// Least height of concrete above the zone's top on both blocks [m]
+    /// Least height of concrete above the zone's top on both blocks \[m\]
     /// (waived where a block is complete); default 6.
     pub min_cover_m: f64,
     /// Largest supercooling of a zone's second-stage target [°C]; default 3.
@@ -37,7 +37,7 @@ pub struct PlannerSettings {
     /// Supercooling is searched on this grid [°C]; default 0.25.
     pub supercooling_step_c: f64,
     /// Height of the cooling region above a zone that is supercooled with it
-    /// [m]; default 9 (one zone of the demo; practice cools the zone above
+    /// \[m\]; default 9 (one zone of the demo; practice cools the zone above
     /// with it so the gradient stays small).
     pub supercool_above_m: f64,
     /// Site limit: the concrete of a supercooled zone may not be colder at
@@ -54,7 +54,7 @@ pub struct PlannerSettings {
     /// Site limit: the coldest cooling water the chillers deliver [°C];
     /// default 4. Supercooling never lowers a stage's water below it.
     pub min_water_temp_c: f64,
-    /// Longest delay searched [days]; default 60.
+    /// Longest delay searched \[days\]; default 60.
     pub max_delay_days: u32,
     /// Cost of 1 °C of supercooling of one zone, in the same unit as
     /// `cost_per_day`; default 1.

@@ -440,7 +440,7 @@ pub fn validate(s: &Schedules) -> Result<(), ScheduleError> {
     Ok(())
 }
 
-/// How far after the scene's epoch a scheduled date may lie [years]: the
+/// How far after the scene's epoch a scheduled date may lie \[years\]: the
 /// longest dam constructions take about a decade, so a date beyond this is
 /// a typo (a grouting planned in 2099 asked for a 27,539-day simulation).
 pub const MAX_SCHEDULE_YEARS: i32 = 20;

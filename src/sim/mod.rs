@@ -94,8 +94,8 @@ pub struct JointColumn {
     pub site: Option<u32>,
 }
 
-/// One joint sample: aperture [m], state, temperature [°C] (NaN without a
-/// thermal model), pressure across the joint [Pa] (compression positive;
+/// One joint sample: aperture \[m\], state, temperature [°C] (NaN without a
+/// thermal model), pressure across the joint \[Pa\] (compression positive;
 /// [`crate::mechanics::JointReading`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointSample {

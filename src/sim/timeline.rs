@@ -77,7 +77,7 @@ impl Timeline {
         tl
     }
 
-    /// The events at time `t` [days], if `t` is a midnight that has any.
+    /// The events at time `t` \[days\], if `t` is a midnight that has any.
     pub fn at(&self, t: f64) -> Option<&DayEvents> {
         if t.fract() != 0.0 {
             return None;
@@ -114,7 +114,7 @@ impl Timeline {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ladder {
     pub nominal: f64,
-    /// time of the last restart (pour or stage change) [d]; the schedule
+    /// time of the last restart (pour or stage change) \[d\]; the schedule
     /// counts from it
     pub since: f64,
 }

@@ -103,12 +103,12 @@ pub struct Row {
     /// largest live mechanical system (0 without mechanics)
     pub mech_dofs: usize,
     pub steps: usize,
-    /// mesh generation and simulation [s]
+    /// mesh generation and simulation \[s\]
     pub seconds: f64,
-    /// deciding aperture against the reference, over the zones [mm]
+    /// deciding aperture against the reference, over the zones \[mm\]
     pub max_aperture_err_mm: f64,
     pub rms_aperture_err_mm: f64,
-    /// any of the four zone points [mm]
+    /// any of the four zone points \[mm\]
     pub max_point_err_mm: f64,
     /// either block's zone temperature [°C]
     pub max_temp_err_c: f64,
@@ -129,7 +129,7 @@ pub struct AccuracyTable {
     pub scene: String,
     pub zones: usize,
     pub rows: Vec<Row>,
-    /// Richardson estimate of the reference's deciding-aperture error [mm]
+    /// Richardson estimate of the reference's deciding-aperture error \[mm\]
     pub reference_error_mm: f64,
     /// how the estimate was made, knob by knob
     pub reference_note: String,
@@ -149,7 +149,7 @@ pub struct ZoneValues {
     pub setting: String,
     pub zone: ZoneId,
     pub planned: chrono::NaiveDate,
-    /// the deciding aperture [mm]
+    /// the deciding aperture \[mm\]
     pub deciding_mm: Option<f64>,
     /// the zone's mean temperature in blocks A and B [°C]
     pub temps_c: [Option<f64>; 2],
@@ -178,7 +178,7 @@ impl Sample {
     }
 }
 
-/// What a Richardson estimate is made of: the deciding aperture [mm] or
+/// What a Richardson estimate is made of: the deciding aperture \[mm\] or
 /// the warmer block's zone temperature [°C].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Quantity {
@@ -326,7 +326,7 @@ fn compare(row: &mut Row, a: &HashMap<ZoneId, Sample>, reference: &HashMap<ZoneI
 /// The zones whose verdict in `a` differs from the reference's, leaving
 /// out those the reference cannot decide: the two deciding apertures lie
 /// either side of the aperture limit that separates the two verdicts, the
-/// reference's within `band[0]` [mm] (its estimated error) of it; or, for
+/// reference's within `band[0]` \[mm\] (its estimated error) of it; or, for
 /// a not-groutable verdict against another, the two warmer zone
 /// temperatures lie either side of the temperature limit, the reference's
 /// within `band[1]` [°C] of it. `limits` are `[min_aperture_mm,

@@ -216,7 +216,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
 pub struct GroutingDateDiff {
     /// samples present in both runs
     pub samples: usize,
-    /// largest aperture difference [m]
+    /// largest aperture difference \[m\]
     pub max_aperture_diff_m: f64,
     /// samples whose contact states differ
     pub states_differ: usize,

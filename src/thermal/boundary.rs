@@ -95,7 +95,7 @@ impl Water {
         Water { epoch, law, level }
     }
 
-    /// Water level [m]; `None` before impounding (before the first reservoir.csv row).
+    /// Water level \[m\]; `None` before impounding (before the first reservoir.csv row).
     /// After the last row the last level holds.
     pub fn level(&self, day: f64) -> Option<f64> {
         let first = self.level.first_day()?;

@@ -100,7 +100,7 @@ impl ElementData {
         thermal_kernels::face_convection(&fc, beta_day)
     }
 
-    /// Σ c_k T_k over the element: its stored heat [J].
+    /// Σ c_k T_k over the element: its stored heat \[J\].
     pub fn stored_heat(&self, e: usize, temperature: &[f64]) -> f64 {
         self.cap_lumped[e]
             .iter()

@@ -7,19 +7,19 @@ use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct HeatLedger {
-    /// Stored heat Σ c_i T_i at the start of the run [J].
+    /// Stored heat Σ c_i T_i at the start of the run \[J\].
     pub stored_start: f64,
-    /// Heat brought in by newborn elements at their placement temperature [J].
+    /// Heat brought in by newborn elements at their placement temperature \[J\].
     pub births: f64,
-    /// Adiabatic hydration heat released [J].
+    /// Adiabatic hydration heat released \[J\].
     pub hydration: f64,
-    /// Heat removed (negative) or added by pipes, net of hydration [J].
+    /// Heat removed (negative) or added by pipes, net of hydration \[J\].
     pub pipes: f64,
-    /// Convective exchange with air [J].
+    /// Convective exchange with air \[J\].
     pub air: f64,
-    /// Heat through submerged (prescribed-temperature) nodes [J].
+    /// Heat through submerged (prescribed-temperature) nodes \[J\].
     pub water: f64,
-    /// Heat through far faces held at a fixed temperature (`[boundary]`) [J].
+    /// Heat through far faces held at a fixed temperature (`[boundary]`) \[J\].
     #[serde(default)]
     pub far: f64,
 }

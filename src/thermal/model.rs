@@ -93,15 +93,15 @@ pub struct ThermalStats {
     pub pipe_terms: usize,
     /// conjugate-gradient iterations (PCG solver)
     pub pcg_iterations: usize,
-    /// wall time of the rebuilds [s]
+    /// wall time of the rebuilds \[s\]
     pub seconds_symbolic: f64,
-    /// wall time of the numeric factorisations [s]
+    /// wall time of the numeric factorisations \[s\]
     pub seconds_numeric: f64,
-    /// wall time of the solves (triangular or PCG) [s]
+    /// wall time of the solves (triangular or PCG) \[s\]
     pub seconds_solve: f64,
-    /// wall time of the boundary reassemblies [s]
+    /// wall time of the boundary reassemblies \[s\]
     pub seconds_assembly: f64,
-    /// largest live system [dofs]
+    /// largest live system \[dofs\]
     pub max_dofs: usize,
 }
 
@@ -886,7 +886,7 @@ impl ThermalModel {
 
     /// Checks the solution `x` against the unmodified equations and returns
     /// the heat gained from the air, from the water and through the fixed
-    /// far sides over the step [J] (the last two from the reactions of the
+    /// far sides over the step \[J\] (the last two from the reactions of the
     /// fixed rows, split by `far_rows`).
     fn boundary_heat(
         &self,
@@ -949,7 +949,7 @@ impl ThermalModel {
         }
     }
 
-    /// Stored heat Σ c_i T_i of the live dofs [J].
+    /// Stored heat Σ c_i T_i of the live dofs \[J\].
     pub fn stored_heat(&self) -> f64 {
         (0..self.state.live.len())
             .filter(|&e| self.state.live[e])
@@ -995,11 +995,11 @@ impl ThermalModel {
 
 /// Heat released in a step by hydration and pipe cooling.
 struct StepSources {
-    /// per live dof [J]
+    /// per live dof \[J\]
     q: Vec<f64>,
-    /// hydration heat of the step [J]
+    /// hydration heat of the step \[J\]
     hydration: f64,
-    /// heat the pipes took out (negative) [J]
+    /// heat the pipes took out (negative) \[J\]
     pipes: f64,
     /// lifts whose source had a running stage
     pipe_terms: usize,

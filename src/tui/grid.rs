@@ -70,7 +70,7 @@ pub struct Cell {
     pub joint: u32,
     pub zone: u32,
     pub state: CellState,
-    /// aperture at the deciding point on the planned date [mm]
+    /// aperture at the deciding point on the planned date \[mm\]
     pub aperture_mm: Option<f64>,
     pub planned: Option<NaiveDate>,
 }
