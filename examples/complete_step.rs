@@ -54,6 +54,15 @@ fn main() -> anyhow::Result<()> {
         c.product_flops / 1e9,
         c.max_rank
     );
+    println!(
+        "analysis {:.1} s (ordering {:.1} s), rock condensed {:.1} s, rock solves {:.1} s, assembly {:.1} s, joints {:.1} s",
+        s.seconds_symbolic,
+        s.seconds_ordering,
+        s.seconds_condensation,
+        s.seconds_rock,
+        s.seconds_assembly,
+        s.seconds_joints
+    );
     Ok(())
 }
 
