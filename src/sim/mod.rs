@@ -880,9 +880,9 @@ impl MechanicalJob {
 }
 
 /// The mechanical step after the one ending at `t1`, from the step ladder
-/// as it stands before its growth at `t1`, with the lifts poured at `t1`;
-/// None when the events of `t1` grout (new springs), when mechanical steps
-/// may span several days, or at the end. The thermal ladder may still
+/// as it stands before its growth at `t1` (or, when mechanical steps may
+/// span several days, from the days with events), with the lifts poured
+/// at `t1`; None at the end. The thermal ladder may still
 /// restart at `t1` on a cooling target reached; the step then differs and
 /// the factor made for it is discarded.
 fn next_mechanical_step(
@@ -892,7 +892,7 @@ fn next_mechanical_step(
     t1: f64,
     end: f64,
 ) -> Option<NextStep> {
-    if time.mechanics_max_step_days > 1 || t1 >= end || t1.fract() != 0.0 {
+    if t1 >= end || t1.fract() != 0.0 {
         return None;
     }
     ladder.grow(time);
@@ -903,6 +903,22 @@ fn next_mechanical_step(
         if events.stage_change || !pours.is_empty() {
             ladder.restart(time, t1);
         }
+    }
+    let longest = time.mechanics_max_step_days;
+    if longest > 1 {
+        // It ends `longest` days on, on the next day with events, or at
+        // the end (`Simulation::mechanical_step_due`); a checkpoint day
+        // ends it sooner, and the factor made for it is then discarded
+        // like any made for an interval the step did not have.
+        let t = (t1 + f64::from(longest))
+            .min(timeline.next_event_after(t1))
+            .min(end);
+        return Some(NextStep {
+            interval: (t1, t),
+            pours,
+            grouting,
+            later_pours: timeline.pours_after(t1),
+        });
     }
     let mut t = t1;
     loop {
