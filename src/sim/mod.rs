@@ -904,33 +904,28 @@ fn next_mechanical_step(
             ladder.restart(time, t1);
         }
     }
-    let longest = time.mechanics_max_step_days;
-    if longest > 1 {
-        // It ends `longest` days on, on the next day with events, or at
+    let t = if time.mechanics_max_step_days > 1 {
+        // It ends that many days on, on the next day with events, or at
         // the end (`Simulation::mechanical_step_due`); a checkpoint day
         // ends it sooner, and the factor made for it is then discarded
         // like any made for an interval the step did not have.
-        let t = (t1 + f64::from(longest))
+        (t1 + f64::from(time.mechanics_max_step_days))
             .min(timeline.next_event_after(t1))
-            .min(end);
-        return Some(NextStep {
-            interval: (t1, t),
-            pours,
-            grouting,
-            later_pours: timeline.pours_after(t1),
-        });
-    }
-    let mut t = t1;
-    loop {
-        t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
-        ladder.grow(time);
-        if t.fract() == 0.0 || t >= end {
-            return Some(NextStep {
-                interval: (t1, t),
-                pours,
-                grouting,
-                later_pours: timeline.pours_after(t1),
-            });
+            .min(end)
+    } else {
+        let mut t = t1;
+        loop {
+            t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
+            ladder.grow(time);
+            if t.fract() == 0.0 || t >= end {
+                break t;
+            }
         }
-    }
+    };
+    Some(NextStep {
+        interval: (t1, t),
+        pours,
+        grouting,
+        later_pours: timeline.pours_after(t1),
+    })
 }
