@@ -202,7 +202,7 @@ fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
 /// bits may differ as for steps of a day): the same labels, the
 /// apertures within 1e-12 m, the temperatures to the bit.
 #[test]
-fn longer_mechanical_steps_factorised_ahead_change_no_bit() {
+fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
     let mut inputs = inputs();
     inputs.scene.time.mechanics_max_step_days = 3;
     let run = |ahead| run_in_process(&inputs, |sim| sim.set_factor_ahead(ahead));
