@@ -558,11 +558,9 @@ impl<'a> Simulation<'a> {
     /// grouting, stage changes, snapshots, observed days) and on a
     /// checkpoint day (a checkpoint holds no pending step).
     fn mechanical_step_due(&self, end: f64) -> bool {
-        let longest = self.scene.time.mechanics_max_step_days;
-        longest <= 1
-            || self.day >= end
-            || self.day - self.mech_t0 >= f64::from(longest)
-            || self.timeline.at(self.day).is_some()
+        let time = &self.scene.time;
+        time.mechanics_max_step_days <= 1
+            || self.day >= longer_step_end(time, &self.timeline, self.mech_t0, end)
             || self.checkpoint_due()
     }
 
@@ -879,6 +877,16 @@ impl MechanicalJob {
     }
 }
 
+/// The end of a mechanical step started at the midnight `t0` that may span
+/// several days: `mechanics_max_step_days` on, the next day with events
+/// (pours, grouting, stage changes, snapshots, observed days), or the end,
+/// whichever comes first (every day with events is a thermal step's end).
+fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) -> f64 {
+    (t0 + f64::from(time.mechanics_max_step_days))
+        .min(timeline.next_event_after(t0))
+        .min(end)
+}
+
 /// The mechanical step after the one ending at `t1`, from the step ladder
 /// as it stands before its growth at `t1` (or, when mechanical steps may
 /// span several days, from the days with events), with the lifts poured
@@ -905,13 +913,10 @@ fn next_mechanical_step(
         }
     }
     let t = if time.mechanics_max_step_days > 1 {
-        // It ends that many days on, on the next day with events, or at
-        // the end (`Simulation::mechanical_step_due`); a checkpoint day
-        // ends it sooner, and the factor made for it is then discarded
-        // like any made for an interval the step did not have.
-        (t1 + f64::from(time.mechanics_max_step_days))
-            .min(timeline.next_event_after(t1))
-            .min(end)
+        // a checkpoint day ends it sooner (`Simulation::mechanical_step_due`),
+        // and the factor made for it is then discarded like any made for
+        // an interval the step did not have
+        longer_step_end(time, timeline, t1, end)
     } else {
         let mut t = t1;
         loop {
