@@ -924,25 +924,21 @@ impl Capacitance {
     }
 
     /// Computes the products YᵢᵀYⱼ not known yet among `columns`, block
-    /// by block ([`gram`]): of every column missing a product with an
-    /// older column (or itself), with every column. A missing pair is
-    /// charged to its newer column, so a pass that adds columns to those
-    /// of the last S computes their rows alone.
+    /// by block ([`gram`]): every product of the columns that cover the
+    /// missing pairs ([`cover_missing`]) with every column.
     fn fill_dots(&mut self, mut columns: Vec<u32>, par: Par) {
         columns.sort_unstable();
         columns.dedup();
-        let (mut new, mut old) = (Vec::new(), Vec::new());
-        for (k, &i) in columns.iter().enumerate() {
-            let row = &self.dots[i as usize];
-            if columns[..=k].iter().any(|&j| row[j as usize].is_nan()) {
-                new.push(i);
-            } else {
-                old.push(i);
-            }
-        }
+        let dots = &self.dots;
+        let new = cover_missing(&columns, |lo, hi| dots[hi as usize][lo as usize].is_nan());
         if new.is_empty() {
             return;
         }
+        let old: Vec<u32> = columns
+            .iter()
+            .copied()
+            .filter(|i| new.binary_search(i).is_err())
+            .collect();
         let t = std::time::Instant::now();
         let ys = |set: &[u32]| -> Vec<&ReachColumn> {
             set.iter().map(|&i| &self.y[i as usize]).collect()
@@ -1134,6 +1130,39 @@ impl Capacitance {
     }
 }
 
+/// A few of `columns` (sorted, distinct), in increasing order, that take
+/// part in every pair whose product is `missing(lo, hi)` (lo ≤ hi, a
+/// column's own included): chosen greedily, the one in the most missing
+/// pairs first (ties to the lower index). Charging each missing pair to
+/// its newer column instead recomputed whole rows: a slipping point
+/// coupled again after a pass without it made every column added in
+/// between "new" (a late day of the Xiaowan-like arch: 927 of 1,803
+/// columns' rows for 14,873 missing products; its products 23.6 against
+/// 18.5 Gflop a day).
+fn cover_missing(columns: &[u32], missing: impl Fn(u32, u32) -> bool) -> Vec<u32> {
+    let n = columns.len();
+    let missing_at = |a: usize, b: usize| missing(columns[a.min(b)], columns[a.max(b)]);
+    let mut degree: Vec<usize> = (0..n)
+        .map(|a| (0..n).filter(|&b| missing_at(a, b)).count())
+        .collect();
+    let mut chosen = vec![false; n];
+    while let Some((a, _)) = degree
+        .iter()
+        .enumerate()
+        .filter(|&(_, &d)| d > 0)
+        .max_by_key(|&(a, &d)| (d, std::cmp::Reverse(a)))
+    {
+        chosen[a] = true;
+        degree[a] = 0;
+        for b in 0..n {
+            if !chosen[b] && b != a && missing_at(a, b) {
+                degree[b] -= 1;
+            }
+        }
+    }
+    (0..n).filter(|&a| chosen[a]).map(|a| columns[a]).collect()
+}
+
 /// The system of one corrected solve: the matrix, its border on the base
 /// factor, the rows held and the LU of its capacitance matrix (`None`
 /// when the border is empty).
@@ -1157,5 +1186,58 @@ impl Border {
     /// Rows of the capacitance system.
     fn size(&self) -> usize {
         self.changes.len() + self.couplings.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cover_missing;
+    use std::collections::BTreeSet;
+
+    /// A column back after passes without it misses its products with
+    /// the columns made meanwhile: it alone is recomputed, not all of them.
+    #[test]
+    fn a_column_back_is_recomputed_alone() {
+        let columns: Vec<u32> = (0..10).collect();
+        let missing = |lo: u32, hi: u32| lo == 3 && hi >= 5;
+        assert_eq!(cover_missing(&columns, missing), vec![3]);
+    }
+
+    /// New columns miss every product, their own included: all of them.
+    #[test]
+    fn new_columns_are_recomputed() {
+        let columns: Vec<u32> = (0..8).collect();
+        let missing = |_lo: u32, hi: u32| hi >= 6;
+        assert_eq!(cover_missing(&columns, missing), vec![6, 7]);
+        assert_eq!(cover_missing(&columns, |_, _| false), Vec::<u32>::new());
+    }
+
+    /// On scattered missing pairs every one has a recomputed column.
+    #[test]
+    fn every_missing_pair_is_covered() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        for round in 0..50 {
+            let n = 5 + round % 40;
+            let columns: Vec<u32> = (0..n as u32).map(|c| 3 * c + 1).collect();
+            let mut missing = BTreeSet::new();
+            for a in 0..n {
+                for b in a..n {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    if seed.is_multiple_of(11) {
+                        missing.insert((columns[a], columns[b]));
+                    }
+                }
+            }
+            let cover = cover_missing(&columns, |lo, hi| missing.contains(&(lo, hi)));
+            assert!(cover.windows(2).all(|w| w[0] < w[1]));
+            for &(lo, hi) in &missing {
+                assert!(
+                    cover.contains(&lo) || cover.contains(&hi),
+                    "({lo}, {hi}) not covered by {cover:?}"
+                );
+            }
+        }
     }
 }
