@@ -398,12 +398,11 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    /// The matrix the first pass of a step with stiffness `a` factorises
-    /// when its states start as `states`.
+    /// The matrix a step with stiffness `a` factorises first when its
+    /// states start as `states`: their rows held ([`start_rows`]).
     pub fn first_pass(a: &SparseSym, live: &LiveSystem, states: &[JointPointState]) -> Prepared {
-        let work = first_guess(live, states);
-        let (fixed, springs) = guess_rows(live, &work);
-        let with = with_springs(a, live, &work);
+        let (fixed, springs) = start_rows(live, states);
+        let with = with_springs(a, live, states);
         let base_diag = with.diag();
         let mut m = with;
         m.apply_dirichlet(&fixed);
@@ -428,6 +427,19 @@ fn first_guess(live: &LiveSystem, old: &[JointPointState]) -> Vec<JointPointStat
         }
     }
     work
+}
+
+/// The rows a step's first factor holds with the correction on: those of
+/// the step's start states, where a point that slipped holds its normal
+/// row alone although the first pass tries it stuck ([`first_guess`]).
+/// Most such points slip again, so the first pass corrects their held
+/// tangential rows (the same columns a stuck point's release needs) and
+/// the passes after it correct only the few that stick; a factor of the
+/// stick trials had every slipping point's two rows released in every
+/// later pass. The answer is the same: the correction is exact. The
+/// exact path (no correction) factorises the first pass's own rows.
+fn start_rows(live: &LiveSystem, states: &[JointPointState]) -> (Vec<bool>, Vec<bool>) {
+    guess_rows(live, states)
 }
 
 /// The rows a guess holds (the supports, all three of a stick point, the
@@ -1076,14 +1088,19 @@ impl ActiveSet {
             self.springs = springs;
         }
         if let Some(reason) = self.refactor_reason(live, fixed) {
+            let held = if reason == RefactorReason::Step && self.capacitance {
+                start_rows(live, &trial.old).0
+            } else {
+                fixed.to_vec()
+            };
             let mut m = self.a_cur.clone();
-            m.apply_dirichlet(fixed);
+            m.apply_dirichlet(&held);
             factorize(live, &m, &mut trial.out)?;
             trial.out.refactor_reasons.count(reason);
             let base_diag = self.a_cur.diag();
             self.factored = Some((
                 self.springs.clone(),
-                Capacitance::with_diagonal(fixed.to_vec(), base_diag),
+                Capacitance::with_diagonal(held, base_diag),
             ));
         }
         Ok(())
