@@ -560,16 +560,12 @@ impl Capacitance {
         solver: &CholeskySolver,
         changes: &[(u32, RowChange)],
     ) -> (f64, usize) {
-        let m = changes.len() as f64;
-        let known = self.y.len();
-        self.new_keys(changes.iter().copied())
+        let dofs: Vec<u32> = self
+            .new_keys(changes.iter().copied())
             .iter()
-            .enumerate()
-            .map(|(k, &(dof, _))| (k, solver.reach_cost(dof as usize)))
-            .fold((0.0, 0), |(f, b), (k, (cf, rows))| {
-                let bytes = 8 * (rows as usize + known + k + 1);
-                (f + cf + 2.0 * rows as f64 * m, b + bytes)
-            })
+            .map(|&(dof, _)| dof)
+            .collect();
+        columns_cost(solver, &dofs, changes.len(), self.y.len())
     }
 
     /// The columns a coupling borders the factor with: its reaction row's
@@ -1128,6 +1124,26 @@ impl Capacitance {
         }
         Ok(Some(s))
     }
+}
+
+/// What new columns on the rows `dofs` would cost a correction of `rank`
+/// rows on `solver`'s factor that keeps `known` columns already: the
+/// flops of their reach solves and products and the bytes they would hold
+/// ([`Capacitance::new_columns_cost`]).
+pub fn columns_cost(
+    solver: &CholeskySolver,
+    dofs: &[u32],
+    rank: usize,
+    known: usize,
+) -> (f64, usize) {
+    let m = rank as f64;
+    dofs.iter()
+        .enumerate()
+        .map(|(k, &dof)| (k, solver.reach_cost(dof as usize)))
+        .fold((0.0, 0), |(f, b), (k, (cf, rows))| {
+            let bytes = 8 * (rows as usize + known + k + 1);
+            (f + cf + 2.0 * rows as f64 * m, b + bytes)
+        })
 }
 
 /// A few of `columns` (sorted, distinct), in increasing order, that take

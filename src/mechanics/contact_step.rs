@@ -81,7 +81,7 @@
 
 use std::time::Instant;
 
-use crate::fem::capacitance::{constrained_rhs, held_residual};
+use crate::fem::capacitance::{columns_cost, constrained_rhs, held_residual};
 use crate::fem::{
     relative_residual, Capacitance, CapacitanceStats, Coupling, Refine, SolveError, SparseSym,
     REFINE_TO,
@@ -433,13 +433,35 @@ fn first_guess(live: &LiveSystem, old: &[JointPointState]) -> Vec<JointPointStat
 /// the step's start states, where a point that slipped holds its normal
 /// row alone although the first pass tries it stuck ([`first_guess`]).
 /// Most such points slip again, so the first pass corrects their held
-/// tangential rows (the same columns a stuck point's release needs) and
+/// tangential rows (the columns a stuck point's release needs anyway) and
 /// the passes after it correct only the few that stick; a factor of the
 /// stick trials had every slipping point's two rows released in every
-/// later pass. The answer is the same: the correction is exact. The
-/// exact path (no correction) factorises the first pass's own rows.
+/// later pass (a late day of the Xiaowan-like arch: corrections of rank
+/// ~1,150 against ~150–540). The answer is the same: the correction is
+/// exact. Where the first pass's correction would cost more than a
+/// factorisation (thousands of points slipped), the first pass's own rows,
+/// as the exact path (no correction) always factorises.
 fn start_rows(live: &LiveSystem, states: &[JointPointState]) -> (Vec<bool>, Vec<bool>) {
-    guess_rows(live, states)
+    let (start, springs) = guess_rows(live, states);
+    let (trial, _) = guess_rows(live, &first_guess(live, states));
+    let corrected: Vec<u32> = (0..start.len() as u32)
+        .filter(|&i| start[i as usize] != trial[i as usize])
+        .collect();
+    let (flops, bytes) = columns_cost(&live.solver, &corrected, corrected.len(), 0);
+    if past_break_even(live, flops, corrected.len(), bytes) {
+        (trial, springs)
+    } else {
+        (start, springs)
+    }
+}
+
+/// Whether a correction of `rank` rows whose new columns cost
+/// `column_flops` would cost more than a factorisation of `live`'s
+/// system, or hold more than [`CAPACITANCE_MAX_BYTES`] with `bytes`.
+fn past_break_even(live: &LiveSystem, column_flops: f64, rank: usize, bytes: usize) -> bool {
+    let rank = rank as f64;
+    let cost = column_flops * CAPACITANCE_SOLVE_WEIGHT + rank * rank * rank / 3.0;
+    cost > live.solver.factor_flops() || bytes > CAPACITANCE_MAX_BYTES
 }
 
 /// The rows a guess holds (the supports, all three of a stick point, the
@@ -1191,10 +1213,8 @@ impl ActiveSet {
         }
         let changes = cap.changes(&self.a_cur, fixed);
         let (column_flops, column_bytes) = cap.new_columns_cost(&live.solver, &changes);
-        let rank = changes.len() as f64;
-        let cost = column_flops * CAPACITANCE_SOLVE_WEIGHT + rank * rank * rank / 3.0;
         let memory = cap.memory_bytes() + column_bytes;
-        if cost > live.solver.factor_flops() || memory > CAPACITANCE_MAX_BYTES {
+        if past_break_even(live, column_flops, changes.len(), memory) {
             Some(RefactorReason::Rank)
         } else {
             None
