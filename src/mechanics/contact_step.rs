@@ -92,6 +92,14 @@ use crate::scene::ContactSolverKind;
 use super::joints::{JointPoint, JointPointState, PointState};
 use super::live::LiveSystem;
 
+/// Rows of the first pass's correction (two per point that slipped in the
+/// last step) from which a step's first factor holds its start states'
+/// rows ([`start_rows`]). Below it the later passes' smaller corrections
+/// save less than the first pass's correction and its full forward half
+/// cost: the demo's steps (a few dozen such rows) took 39.5–40.6 s
+/// against 38.7–39.5 s for its whole construction; a late day of the
+/// Xiaowan-like arch (~800 rows) 7.5–7.7 against 8.1–8.3 s.
+const START_ROWS_FROM: usize = 200;
 /// Relative residual above which a linear solve of the contact loop is rejected.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
 /// Residual a pass's corrected solve is refined to: enough for the states
@@ -438,9 +446,10 @@ fn first_guess(live: &LiveSystem, old: &[JointPointState]) -> Vec<JointPointStat
 /// stick trials had every slipping point's two rows released in every
 /// later pass (a late day of the Xiaowan-like arch: corrections of rank
 /// ~1,150 against ~150–540). The answer is the same: the correction is
-/// exact. Where the first pass's correction would cost more than a
-/// factorisation (thousands of points slipped), the first pass's own rows,
-/// as the exact path (no correction) always factorises.
+/// exact. Where the first pass's correction would have fewer than
+/// [`START_ROWS_FROM`] rows, or cost more than a factorisation (thousands
+/// of points slipped), the first pass's own rows, as the exact path (no
+/// correction) always factorises.
 fn start_rows(live: &LiveSystem, states: &[JointPointState]) -> (Vec<bool>, Vec<bool>) {
     let (start, springs) = guess_rows(live, states);
     let (trial, _) = guess_rows(live, &first_guess(live, states));
@@ -448,7 +457,7 @@ fn start_rows(live: &LiveSystem, states: &[JointPointState]) -> (Vec<bool>, Vec<
         .filter(|&i| start[i as usize] != trial[i as usize])
         .collect();
     let (flops, bytes) = columns_cost(&live.solver, &corrected, corrected.len(), 0);
-    if past_break_even(live, flops, corrected.len(), bytes) {
+    if corrected.len() < START_ROWS_FROM || past_break_even(live, flops, corrected.len(), bytes) {
         (trial, springs)
     } else {
         (start, springs)
