@@ -1158,9 +1158,17 @@ pub fn columns_cost(
 fn cover_missing(columns: &[u32], missing: impl Fn(u32, u32) -> bool) -> Vec<u32> {
     let n = columns.len();
     let missing_at = |a: usize, b: usize| missing(columns[a.min(b)], columns[a.max(b)]);
-    let mut degree: Vec<usize> = (0..n)
-        .map(|a| (0..n).filter(|&b| missing_at(a, b)).count())
-        .collect();
+    let mut degree = vec![0usize; n];
+    for a in 0..n {
+        for b in 0..=a {
+            if missing_at(b, a) {
+                degree[a] += 1;
+                if b != a {
+                    degree[b] += 1;
+                }
+            }
+        }
+    }
     let mut chosen = vec![false; n];
     while let Some((a, _)) = degree
         .iter()
