@@ -1152,9 +1152,9 @@ pub fn columns_cost(
 /// pairs first (ties to the lower index). Charging each missing pair to
 /// its newer column instead recomputed whole rows: a slipping point
 /// coupled again after a pass without it made every column added in
-/// between "new" (a late day of the Xiaowan-like arch: 927 of 1,803
-/// columns' rows for 14,873 missing products; its products 23.6 against
-/// 18.5 Gflop a day).
+/// between "new" (day 857 of the Xiaowan-like arch: 927 of 1,803
+/// columns' rows for 14,873 missing products; 23.6 Gflop of products
+/// that day, where the cover takes 18.5).
 fn cover_missing(columns: &[u32], missing: impl Fn(u32, u32) -> bool) -> Vec<u32> {
     let n = columns.len();
     let missing_at = |a: usize, b: usize| missing(columns[a.min(b)], columns[a.max(b)]);

@@ -98,7 +98,8 @@ use super::live::LiveSystem;
 /// save less than the first pass's correction and its full forward half
 /// cost: the demo's steps (a few dozen such rows) took 39.5–40.6 s
 /// against 38.7–39.5 s for its whole construction; a late day of the
-/// Xiaowan-like arch (~800 rows) 7.5–7.7 against 8.1–8.3 s.
+/// Xiaowan-like arch (~800 rows) 7.5–8.2 against 8.1–8.5 s (5 Dec 2026,
+/// alternated).
 const START_ROWS_FROM: usize = 200;
 /// Relative residual above which a linear solve of the contact loop is rejected.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
