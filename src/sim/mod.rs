@@ -333,7 +333,7 @@ impl<'a> Simulation<'a> {
     pub fn observe_days(&mut self, days: &[Day]) {
         for &d in days {
             if (Day(0)..=self.timeline.end_day).contains(&d) {
-                self.timeline.days.entry(d).or_default();
+                self.timeline.days.entry(d).or_default().observed = true;
             }
         }
     }
@@ -354,6 +354,7 @@ impl<'a> Simulation<'a> {
             stage_change,
             snapshot,
             grouting,
+            observed: _,
         } = events;
         self.apply_mechanics_events(self.day, &grouting, &pours);
         let mut restart = stage_change;
@@ -554,8 +555,8 @@ impl<'a> Simulation<'a> {
 
     /// Does the pending mechanical step end at this midnight? Always with
     /// `time.mechanics_max_step_days = 1`; otherwise when it spans that many
-    /// days, at the end, on a day with events or a read history row (pours,
-    /// grouting, stage changes, snapshots, observed days) and on a
+    /// days, at the end, on a day that pours, grouts or is read (snapshots,
+    /// observed days; [`DayEvents::ends_mechanical_step`]) and on a
     /// checkpoint day (a checkpoint holds no pending step).
     fn mechanical_step_due(&self, end: f64) -> bool {
         let time = &self.scene.time;
@@ -878,12 +879,13 @@ impl MechanicalJob {
 }
 
 /// The end of a mechanical step started at the midnight `t0` that may span
-/// several days: `mechanics_max_step_days` on, the next day with events
-/// (pours, grouting, stage changes, snapshots, observed days), or the end,
-/// whichever comes first (every day with events is a thermal step's end).
+/// several days: `mechanics_max_step_days` on, the next day that pours,
+/// grouts or is read (snapshots, observed days; not a cooling stage's
+/// start or end alone, [`DayEvents::ends_mechanical_step`]), or the end,
+/// whichever comes first (every such day is a thermal step's end).
 fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) -> f64 {
     (t0 + f64::from(time.mechanics_max_step_days))
-        .min(timeline.next_event_after(t0))
+        .min(timeline.next_mechanical_event_after(t0))
         .min(end)
 }
 

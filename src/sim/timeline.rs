@@ -23,6 +23,19 @@ pub struct DayEvents {
     pub snapshot: bool,
     /// zones grouted at the start of the day
     pub grouting: Vec<ZoneId>,
+    /// a day whose rows a reader asks for (`Simulation::observe_days`)
+    pub observed: bool,
+}
+
+impl DayEvents {
+    /// Whether the day ends a mechanical step that may span several days
+    /// (`time.mechanics_max_step_days` > 1): it pours, grouts, or has its
+    /// fields or rows read. A cooling stage's start or end alone does not:
+    /// it changes the pipes' water, which the mechanics sees only through
+    /// the temperatures at the step's ends.
+    pub fn ends_mechanical_step(&self) -> bool {
+        !self.pours.is_empty() || !self.grouting.is_empty() || self.snapshot || self.observed
+    }
 }
 
 /// Events keyed by whole day.
@@ -83,6 +96,20 @@ impl Timeline {
             return None;
         }
         self.days.get(&Day::containing(t))
+    }
+
+    /// The time of the first day strictly after time `t` that ends a
+    /// mechanical step spanning several days
+    /// ([`DayEvents::ends_mechanical_step`]), or the end.
+    pub fn next_mechanical_event_after(&self, t: f64) -> f64 {
+        let next = Day::containing(t).plus(1);
+        if next > self.end_day {
+            return self.end_day.t();
+        }
+        self.days
+            .range(next..=self.end_day)
+            .find(|(_, ev)| ev.ends_mechanical_step())
+            .map_or(self.end_day.t(), |(&d, _)| d.t())
     }
 
     /// The first day strictly after time `t` (to the end) that pours lifts:
@@ -250,6 +277,61 @@ mod tests {
         assert_eq!(tl.pours_after(8.0), None, "day 31 is past the end");
         assert_eq!(tl.pours_after(30.0), None);
         assert_eq!(tl.pours_after(45.0), None);
+    }
+
+    /// A longer mechanical step ends on the next day that pours, grouts or
+    /// is read, never on a cooling stage's start or end alone, and at the
+    /// end at the latest.
+    #[test]
+    fn mechanical_steps_end_on_pours_groutings_and_read_days_only() {
+        let mut tl = Timeline {
+            end_day: Day(40),
+            ..Default::default()
+        };
+        let stage = DayEvents {
+            stage_change: true,
+            ..Default::default()
+        };
+        tl.days.insert(Day(2), stage.clone());
+        tl.days.insert(
+            Day(5),
+            DayEvents {
+                pours: vec![(0, 1, 12.0)],
+                stage_change: true,
+                ..Default::default()
+            },
+        );
+        tl.days.insert(Day(7), stage.clone());
+        tl.days.insert(
+            Day(9),
+            DayEvents {
+                grouting: vec![ZoneId { joint: 1, zone: 1 }],
+                ..Default::default()
+            },
+        );
+        tl.days.insert(
+            Day(12),
+            DayEvents {
+                snapshot: true,
+                ..Default::default()
+            },
+        );
+        tl.days.insert(
+            Day(15),
+            DayEvents {
+                observed: true,
+                ..Default::default()
+            },
+        );
+        tl.days.insert(Day(20), stage);
+        assert!(!tl.days[&Day(2)].ends_mechanical_step());
+        assert_eq!(tl.next_event_after(0.0), 2.0, "a thermal step ends on it");
+        assert_eq!(tl.next_mechanical_event_after(0.0), 5.0);
+        assert_eq!(tl.next_mechanical_event_after(5.0), 9.0);
+        assert_eq!(tl.next_mechanical_event_after(9.0), 12.0);
+        assert_eq!(tl.next_mechanical_event_after(12.0), 15.0);
+        assert_eq!(tl.next_mechanical_event_after(15.0), 40.0, "the end");
+        assert_eq!(tl.next_mechanical_event_after(40.0), 40.0);
     }
 
     /// 0.1 d for 2 days, 0.25 d to day 7, then the ladder (capped at 1 d):
