@@ -151,6 +151,23 @@ enum StudyCommand {
         #[arg(long, value_delimiter = ',')]
         knobs: Vec<String>,
     },
+    /// An approximation's error against the exact path where the planner
+    /// decides: the apertures.csv of two runs of one scene (e.g. one with
+    /// `[time] mechanics_max_step_days = 3`, one exact) compared at every
+    /// zone's planned grouting date (the deciding aperture: largest and RMS
+    /// difference, contact states and verdicts that differ), then over every
+    /// row both share; nothing is simulated.
+    Compare {
+        /// First run: a run folder written by `run` or `plan`, or its
+        /// apertures.csv (e.g. the approximation).
+        run_a: PathBuf,
+        /// Second run, the same way (e.g. the exact path).
+        run_b: PathBuf,
+        /// Scene both runs were made from: its grouting schedule's planned
+        /// dates and its [planner] aperture point and limit (default:
+        /// models/demo_arch.toml).
+        scene: Option<PathBuf>,
+    },
     /// Weekly update: a plan from scratch, the same plan restarted from its
     /// run folder, and the plan after a schedule edit, timed (written to a
     /// scratch folder under the system's temp dir, removed at the end).
@@ -294,6 +311,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
         Command::Study {
             what: StudyCommand::Restart { scene },
         } => study_restart(scene),
+        Command::Study {
+            what:
+                StudyCommand::Compare {
+                    run_a,
+                    run_b,
+                    scene,
+                },
+        } => study_compare(&run_a, &run_b, scene),
         Command::Study {
             what:
                 StudyCommand::Accuracy {
@@ -461,6 +486,14 @@ fn print_plan(summary: &app::plan::PlanSummary) {
 fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     groutready::study::restart::restart(&scene)?;
+    Ok(0)
+}
+
+/// `groutready study compare`: two runs' apertures at the planned dates.
+fn study_compare(run_a: &Path, run_b: &Path, scene: Option<PathBuf>) -> anyhow::Result<u8> {
+    let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
+    let comparison = groutready::study::compare::compare(run_a, run_b, &scene)?;
+    print!("{}", comparison.report());
     Ok(0)
 }
 

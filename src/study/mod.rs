@@ -2,6 +2,7 @@
 //! never asserted.
 
 pub mod accuracy;
+pub mod compare;
 pub mod restart;
 
 use std::path::{Path, PathBuf};
@@ -75,6 +76,20 @@ pub enum StudyError {
     /// `schedule synth` onto a folder that already holds schedules.
     #[error("{path}: already holds {files}; schedule synth would overwrite them (give --out another folder, or add --force to overwrite)")]
     WouldOverwrite { path: String, files: String },
+    /// `study compare` given a path that is neither a run folder with
+    /// `apertures.csv` nor such a file.
+    #[error("{path}: {why}: expected a run folder of a scene with joints (written by `groutready run` or `plan`) or its apertures.csv")]
+    NotARun { path: String, why: &'static str },
+    /// An `apertures.csv` that `study compare` cannot read: the file, the
+    /// 1-based line, the cell at fault (1-based column and its name) where
+    /// there is one, what was expected and what was found.
+    #[error("{file}:{line}{}: {message}", .cell.as_ref().map_or(String::new(), |(c, name)| format!(":{c} ({name})")))]
+    Apertures {
+        file: String,
+        line: u64,
+        cell: Option<(usize, String)>,
+        message: String,
+    },
 }
 
 /// The thermal solvers a `--solver` value names (`cholesky`, `pcg` or

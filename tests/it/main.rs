@@ -48,6 +48,7 @@ mod rock_ties;
 mod scene_errors;
 mod schedule_errors;
 mod study_accuracy;
+mod study_compare;
 mod thermal_closed_forms;
 mod tui_screens;
 mod tui_tmux;
