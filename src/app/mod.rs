@@ -275,7 +275,7 @@ pub fn run(
     let aperture_rows = if sim.joint_records.columns.is_empty() {
         0
     } else {
-        let path = staging.path().join("apertures.csv");
+        let path = staging.path().join(output::apertures::FILE_NAME);
         let epoch = inputs.scene.epoch;
         output::apertures::write(&path, epoch, &sim.joint_records, &inputs.aperture_days())
             .map_err(io_err(&path))?

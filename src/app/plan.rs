@@ -150,7 +150,7 @@ fn write_folder(
         output::temperatures::write(&p, epoch, &h.records).map_err(io_err(&p))?;
     }
     if !h.joint_records.columns.is_empty() {
-        let p = dir.join("apertures.csv");
+        let p = dir.join(output::apertures::FILE_NAME);
         output::apertures::write(&p, epoch, &h.joint_records, &inputs.aperture_days())
             .map_err(io_err(&p))?;
     }

@@ -17,6 +17,9 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use crate::sim::JointRecords;
+
+/// The file's name in a run folder.
+pub const FILE_NAME: &str = "apertures.csv";
 use crate::vocab::{Day, Epoch};
 
 /// Writes the file; returns the number of data rows.

@@ -27,7 +27,7 @@ pub const RUN_FOLDER_NAMES: &[&str] = &[
     MARKER,
     "run.txt",
     "temperatures.csv",
-    "apertures.csv",
+    super::apertures::FILE_NAME,
     "fields",
     "readiness.csv",
     "report.json",

@@ -42,12 +42,10 @@ use serde::Deserialize;
 
 use super::StudyError;
 use crate::app::AppError;
+use crate::output::apertures;
 use crate::scene::{PlannerSettings, Scene};
 use crate::schedule::{self, GroutingPlan};
 use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
-
-/// The file a run folder keeps its zone apertures in.
-pub const APERTURES_CSV: &str = "apertures.csv";
 
 /// Shared rows differing by more than this are counted \[mm\]: ten times the
 /// file's resolution, well below the planner's 0.5 mm limit.
@@ -186,7 +184,7 @@ pub fn apertures_csv(run: &Path) -> Result<PathBuf, StudyError> {
         why,
     };
     if run.is_dir() {
-        let file = run.join(APERTURES_CSV);
+        let file = run.join(apertures::FILE_NAME);
         if !file.exists() {
             return Err(not_a_run("no apertures.csv in this folder"));
         }
@@ -752,7 +750,7 @@ mod tests {
         let gone = tmp.path().join("gone");
         let e = apertures_csv(&gone).unwrap_err().to_string();
         assert!(e.contains("gone: no such file or folder"), "{e}");
-        let file = tmp.path().join(APERTURES_CSV);
+        let file = tmp.path().join(apertures::FILE_NAME);
         std::fs::write(&file, A).unwrap();
         assert_eq!(apertures_csv(tmp.path()).unwrap(), file);
         assert_eq!(apertures_csv(&file).unwrap(), file);
