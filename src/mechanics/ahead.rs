@@ -182,18 +182,25 @@ impl Drop for FactorAhead {
     }
 }
 
+/// Lifts (block, lift) poured during a mechanical step, grouped by day
+/// with the day's time, in order.
+pub type PoursByDay = Vec<(f64, Vec<(u32, u32)>)>;
+
 /// The step after the one about to run, as the driver knows it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NextStep {
     /// (t0, t1) of that step
     pub interval: (f64, f64),
-    /// the lifts (block, lift) poured at its start
-    pub pours: Vec<(u32, u32)>,
+    /// the lifts (block, lift) poured at its start and, with pours merged
+    /// into longer steps (`time.mechanics_merge_pours`), on the days inside
+    /// it, grouped by day with the day's time, the start's first
+    pub pours: PoursByDay,
     /// the zones grouted at its start
     pub grouting: Vec<ZoneId>,
-    /// the first day after its start that pours lifts, and those lifts
-    /// (their live set is analysed ahead: [`super::pours_ahead`])
-    pub later_pours: Option<(f64, Vec<(u32, u32)>)>,
+    /// the first step from its end on whose span pours lifts: that step's
+    /// start and its lifts by day, as in `pours` (their live set is
+    /// analysed ahead: [`super::pours_ahead`])
+    pub later_pours: Option<(f64, PoursByDay)>,
 }
 
 /// The live system of a next step whose start pours lifts: numbered and

@@ -567,13 +567,17 @@ impl MechanicsModel {
         let mut live = self.state.live.clone();
         let mut birth = self.state.birth_day.clone();
         let t1 = next.interval.0;
-        self.frame.pour(&next.pours, t1, &mut live, &mut birth);
+        for (day, lifts) in &next.pours {
+            self.frame.pour(lifts, *day, &mut live, &mut birth);
+        }
         let day = if next.pours.is_empty() || births_ordered {
-            let Some((day, lifts)) = &next.later_pours else {
+            let Some((start, pours)) = &next.later_pours else {
                 return;
             };
-            self.frame.pour(lifts, *day, &mut live, &mut birth);
-            *day
+            for (day, lifts) in pours {
+                self.frame.pour(lifts, *day, &mut live, &mut birth);
+            }
+            *start
         } else {
             t1
         };
@@ -890,7 +894,9 @@ impl MechanicsModel {
         let (t0, t1) = next.interval;
         let mut live = self.state.live.clone();
         let mut birth = self.state.birth_day.clone();
-        self.frame.pour(&next.pours, t0, &mut live, &mut birth);
+        for (day, lifts) in &next.pours {
+            self.frame.pour(lifts, *day, &mut live, &mut birth);
+        }
         let merged = self.frame.merge.tied_at(&live, &birth, t0);
         if live == self.state.live && merged == self.merged {
             return None;

@@ -225,6 +225,13 @@ fn time(t: &TimeStepping, s: &Scene) -> Check {
             ),
         ));
     }
+    if t.mechanics_merge_pours && t.mechanics_max_step_days == 1 {
+        return Err(SceneError::invalid(
+            "time.mechanics_merge_pours",
+            "time.mechanics_merge_pours merges pours into mechanical steps of several days: \
+             it needs time.mechanics_max_step_days above 1",
+        ));
+    }
     if !(0.5..=1.0).contains(&t.theta) {
         return Err(SceneError::invalid(
             "time.theta",

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use chrono::NaiveDate;
 
-use crate::mechanics::ahead::NextStep;
+use crate::mechanics::ahead::{NextStep, PoursByDay};
 use crate::mechanics::{Frame, MechError, MechStats, MechanicsModel, Supports};
 use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene, TimeStepping};
@@ -358,12 +358,16 @@ impl<'a> Simulation<'a> {
         } = events;
         self.apply_mechanics_events(self.day, &grouting, &pours);
         let mut restart = stage_change;
+        let born_inside = self.born_inside_step(&pours);
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
                 th.pour(block, lift, self.day, temp);
             }
             self.pours_done += 1;
             restart = true;
+        }
+        if let Some(was_live) = born_inside {
+            self.start_born_at_placement(&was_live);
         }
         if let Some(th) = self.thermal.as_mut() {
             restart |= th.update_stages(self.day);
@@ -379,6 +383,31 @@ impl<'a> Simulation<'a> {
             })?;
         }
         Ok(())
+    }
+
+    /// With pours merged into longer mechanical steps
+    /// (`time.mechanics_merge_pours`), a day that pours inside a pending
+    /// step: the thermal dofs live before its pours, for
+    /// [`Simulation::start_born_at_placement`]. None otherwise.
+    fn born_inside_step(&self, pours: &[(u32, u32, f64)]) -> Option<Vec<bool>> {
+        let inside = self.timeline.merge_pours && !pours.is_empty() && self.mech_temps0.is_some();
+        inside.then(|| self.thermal.as_ref().map(|th| th.live_dofs()))?
+    }
+
+    /// The pending mechanical step's start temperatures of the dofs the
+    /// day's pours made live (those not in `was_live`) set to their
+    /// temperatures now, the placement temperature: a lift born inside a
+    /// step is stress-free as poured, as it is when a step starts on its
+    /// pour day. Dofs shared with older concrete keep the step's start.
+    fn start_born_at_placement(&mut self, was_live: &[bool]) {
+        let (Some(start), Some(th)) = (self.mech_temps0.as_mut(), self.thermal.as_ref()) else {
+            return;
+        };
+        for ((t0, &now), &live) in start.iter_mut().zip(&th.state.temperature).zip(was_live) {
+            if !live {
+                *t0 = now;
+            }
+        }
     }
 
     /// The mechanical model's part of the day's events: the zones grouted,
@@ -555,8 +584,9 @@ impl<'a> Simulation<'a> {
 
     /// Does the pending mechanical step end at this midnight? Always with
     /// `time.mechanics_max_step_days = 1`; otherwise when it spans that many
-    /// days, at the end, on a day that pours, grouts or is read (snapshots,
-    /// observed days; [`DayEvents::ends_mechanical_step`]) and on a
+    /// days, at the end, on a day that pours (unless pours are merged),
+    /// grouts or is read (snapshots, observed days;
+    /// [`DayEvents::ends_mechanical_step`]) and on a
     /// checkpoint day (a checkpoint holds no pending step).
     fn mechanical_step_due(&self, end: f64) -> bool {
         let time = &self.scene.time;
@@ -879,9 +909,10 @@ impl MechanicalJob {
 }
 
 /// The end of a mechanical step started at the midnight `t0` that may span
-/// several days: `mechanics_max_step_days` on, the next day that pours,
-/// grouts or is read (snapshots, observed days; not a cooling stage's
-/// start or end alone, [`DayEvents::ends_mechanical_step`]), or the end,
+/// several days: `mechanics_max_step_days` on, the next day that pours
+/// (unless pours are merged), grouts or is read (snapshots, observed days;
+/// not a cooling stage's start or end alone,
+/// [`DayEvents::ends_mechanical_step`]), or the end,
 /// whichever comes first (every such day is a thermal step's end).
 fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) -> f64 {
     (t0 + f64::from(time.mechanics_max_step_days))
@@ -892,9 +923,9 @@ fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) 
 /// The mechanical step after the one ending at `t1`, from the step ladder
 /// as it stands before its growth at `t1` (or, when mechanical steps may
 /// span several days, from the days with events), with the lifts poured
-/// at `t1`; None at the end. The thermal ladder may still
-/// restart at `t1` on a cooling target reached; the step then differs and
-/// the factor made for it is discarded.
+/// at `t1` (and inside it, with pours merged); None at the end. The
+/// thermal ladder may still restart at `t1` on a cooling target reached;
+/// the step then differs and the factor made for it is discarded.
 fn next_mechanical_step(
     time: &TimeStepping,
     timeline: &Timeline,
@@ -906,11 +937,10 @@ fn next_mechanical_step(
         return None;
     }
     ladder.grow(time);
-    let (mut pours, mut grouting) = (Vec::new(), Vec::new());
+    let mut grouting = Vec::new();
     if let Some(events) = timeline.at(t1) {
         grouting = events.grouting.clone();
-        pours = events.pours.iter().map(|&(b, l, _)| (b, l)).collect();
-        if events.stage_change || !pours.is_empty() {
+        if events.stage_change || !events.pours.is_empty() {
             ladder.restart(time, t1);
         }
     }
@@ -931,8 +961,35 @@ fn next_mechanical_step(
     };
     Some(NextStep {
         interval: (t1, t),
-        pours,
+        pours: timeline.pours_within(t1, t),
         grouting,
-        later_pours: timeline.pours_after(t1),
+        later_pours: first_births_from(time, timeline, t, end),
     })
+}
+
+/// The first mechanical step from the midnight `t` on whose span pours
+/// lifts: its start and its lifts by day, foreseen from the days with
+/// events as [`next_mechanical_step`] foresees its step (a checkpoint day
+/// may end a step sooner; the live set analysed for it is then unused).
+fn first_births_from(
+    time: &TimeStepping,
+    timeline: &Timeline,
+    t: f64,
+    end: f64,
+) -> Option<(f64, PoursByDay)> {
+    if time.mechanics_max_step_days <= 1 {
+        // a step every midnight: the first pour day from `t` on
+        let (day, lifts) = timeline.pours_after(t - 1.0)?;
+        return Some((day, vec![(day, lifts)]));
+    }
+    let mut start = t;
+    while start < end {
+        let step_end = longer_step_end(time, timeline, start, end);
+        let pours = timeline.pours_within(start, step_end);
+        if !pours.is_empty() {
+            return Some((start, pours));
+        }
+        start = step_end;
+    }
+    None
 }

@@ -8,6 +8,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::mechanics::ahead::PoursByDay;
 use crate::scene::{Effect, Scene, TimeStepping};
 use crate::schedule::Schedules;
 use crate::thermal::cooling::PlannedStage;
@@ -29,12 +30,17 @@ pub struct DayEvents {
 
 impl DayEvents {
     /// Whether the day ends a mechanical step that may span several days
-    /// (`time.mechanics_max_step_days` > 1): it pours, grouts, or has its
-    /// fields or rows read. A cooling stage's start or end alone does not:
-    /// it changes the pipes' water, which the mechanics sees only through
-    /// the temperatures at the step's ends.
-    pub fn ends_mechanical_step(&self) -> bool {
-        !self.pours.is_empty() || !self.grouting.is_empty() || self.snapshot || self.observed
+    /// (`time.mechanics_max_step_days` > 1): it grouts, has its fields or
+    /// rows read, or pours unless `merge_pours` (`time.mechanics_merge_pours`:
+    /// a lift poured inside a step is born there, [`Timeline::pours_within`]).
+    /// A cooling stage's start or end alone does not: it changes the pipes'
+    /// water, which the mechanics sees only through the temperatures at the
+    /// step's ends.
+    pub fn ends_mechanical_step(&self, merge_pours: bool) -> bool {
+        (!merge_pours && !self.pours.is_empty())
+            || !self.grouting.is_empty()
+            || self.snapshot
+            || self.observed
     }
 }
 
@@ -43,6 +49,9 @@ impl DayEvents {
 pub struct Timeline {
     pub days: BTreeMap<Day, DayEvents>,
     pub end_day: Day,
+    /// pours do not end a mechanical step spanning several days
+    /// (`time.mechanics_merge_pours`)
+    pub merge_pours: bool,
 }
 
 impl Timeline {
@@ -87,6 +96,7 @@ impl Timeline {
         };
         let end = tl.end_day;
         tl.days.retain(|&d, _| d <= end);
+        tl.merge_pours = scene.time.mechanics_merge_pours;
         tl
     }
 
@@ -108,8 +118,26 @@ impl Timeline {
         }
         self.days
             .range(next..=self.end_day)
-            .find(|(_, ev)| ev.ends_mechanical_step())
+            .find(|(_, ev)| ev.ends_mechanical_step(self.merge_pours))
             .map_or(self.end_day.t(), |(&d, _)| d.t())
+    }
+
+    /// The lifts (block, lift) poured on the days from the midnight `t0`
+    /// up to before `t1`, with each day's time: the births of a mechanical
+    /// step over (t0, t1), those of its start first.
+    pub fn pours_within(&self, t0: f64, t1: f64) -> PoursByDay {
+        let (first, last) = (
+            Day::containing(t0),
+            Day::containing(t1).min(self.end_day.plus(1)),
+        );
+        if first >= last {
+            return Vec::new();
+        }
+        self.days
+            .range(first..last)
+            .filter(|(_, ev)| !ev.pours.is_empty())
+            .map(|(&d, ev)| (d.t(), ev.pours.iter().map(|&(b, l, _)| (b, l)).collect()))
+            .collect()
     }
 
     /// The first day strictly after time `t` (to the end) that pours lifts:
@@ -324,7 +352,7 @@ mod tests {
             },
         );
         tl.days.insert(Day(20), stage);
-        assert!(!tl.days[&Day(2)].ends_mechanical_step());
+        assert!(!tl.days[&Day(2)].ends_mechanical_step(false));
         assert_eq!(tl.next_event_after(0.0), 2.0, "a thermal step ends on it");
         assert_eq!(tl.next_mechanical_event_after(0.0), 5.0);
         assert_eq!(tl.next_mechanical_event_after(5.0), 9.0);
@@ -332,6 +360,18 @@ mod tests {
         assert_eq!(tl.next_mechanical_event_after(12.0), 15.0);
         assert_eq!(tl.next_mechanical_event_after(15.0), 40.0, "the end");
         assert_eq!(tl.next_mechanical_event_after(40.0), 40.0);
+
+        // pours merged: day 5's pour is born inside the step from day 0
+        tl.merge_pours = true;
+        assert!(!tl.days[&Day(5)].ends_mechanical_step(true));
+        assert_eq!(tl.next_mechanical_event_after(0.0), 9.0);
+        assert_eq!(tl.pours_within(0.0, 9.0), vec![(5.0, vec![(0, 1)])]);
+        assert_eq!(tl.pours_within(5.0, 9.0), vec![(5.0, vec![(0, 1)])]);
+        assert!(
+            tl.pours_within(0.0, 5.0).is_empty(),
+            "day 5 starts the next step"
+        );
+        assert!(tl.pours_within(6.0, 40.0).is_empty());
     }
 
     /// 0.1 d for 2 days, 0.25 d to day 7, then the ladder (capped at 1 d):

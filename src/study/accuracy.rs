@@ -777,6 +777,15 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         l.push(Setting::new("mechanics 3 d", "mechanics step", None, |s| {
             s.time.mechanics_max_step_days = 3
         }));
+        l.push(Setting::new(
+            "mechanics 3 d, pours merged",
+            "pours merged",
+            None,
+            |s| {
+                s.time.mechanics_max_step_days = 3;
+                s.time.mechanics_merge_pours = true;
+            },
+        ));
         let element = scene.solver.element.other();
         let name = format!("element {}", element.name());
         l.push(other_form(name, "element", element, |s, e| {

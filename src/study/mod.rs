@@ -197,6 +197,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 exact_scene.solver.contact_capacitance = false;
                 exact_scene.solver.condense_rock = false;
                 exact_scene.time.mechanics_max_step_days = 1;
+                exact_scene.time.mechanics_merge_pours = false;
                 let exact_run = Timed {
                     label: format!("{stem}/exact"),
                     scene: &exact_scene,

@@ -195,38 +195,48 @@ fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
 }
 
 /// Mechanical steps that may span several days (`mechanics_max_step_days
-/// = 3`) are factorised ahead on the second core too (the next step's end
-/// foreseen from the days with events), with the answer of a run that
-/// factorises each step on its own thread to round-off (a factor made
-/// ahead starts from the step before's states, corrected exactly, so the
-/// bits may differ as for steps of a day): the same labels, the
-/// apertures within 1e-12 m, the temperatures to the bit.
+/// = 3`), with pours ending them and merged into them
+/// (`mechanics_merge_pours`), are factorised ahead on the second core too
+/// (the next step's end foreseen from the days with events, and the lifts
+/// born inside it), with the answer of a run that factorises each step on
+/// its own thread to round-off (a factor made ahead starts from the step
+/// before's states, corrected exactly, so the bits may differ as for steps
+/// of a day): the same labels, the apertures within 1e-12 m, the
+/// temperatures to the bit.
 #[test]
 fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
     let mut inputs = inputs();
     inputs.scene.time.mechanics_max_step_days = 3;
-    let run = |ahead| run_in_process(&inputs, |sim| sim.set_factor_ahead(ahead));
-    let (a, b) = (run(true), run(false));
-    let (ma, mb) = (a.2.mechanics.unwrap(), b.2.mechanics.unwrap());
-    let days = inputs.scene.epoch.day(END_DATE.parse().unwrap()).t() as usize;
-    eprintln!(
-        "{} mechanical steps over {days} days; ahead: {} made, {} used, {} discarded",
-        ma.steps, ma.ahead.made, ma.ahead.used, ma.ahead.discarded
-    );
-    assert!(ma.steps < days, "no step spanned several days");
-    assert!(
-        ma.ahead.used > ma.steps / 2 && mb.ahead.made == 0,
-        "factorised ahead: {} of {} steps",
-        ma.ahead.used,
-        ma.steps
-    );
-    assert_eq!(ma.steps, mb.steps, "mechanical steps");
-    let (labels, total, aperture, temperature) = differences(&a.0, &b.0);
-    assert!(
-        labels == 0 && aperture <= 1e-12 && temperature == 0.0,
-        "ahead and not: {labels} of {total} labels, apertures by {aperture:.3e} m, \
-         temperatures by {temperature:.3e} °C"
-    );
+    for merge_pours in [false, true] {
+        inputs.scene.time.mechanics_merge_pours = merge_pours;
+        let run = |ahead| run_in_process(&inputs, |sim| sim.set_factor_ahead(ahead));
+        let (a, b) = (run(true), run(false));
+        let (ma, mb) = (a.2.mechanics.unwrap(), b.2.mechanics.unwrap());
+        let days = inputs.scene.epoch.day(END_DATE.parse().unwrap()).t() as usize;
+        eprintln!(
+            "pours merged {merge_pours}: {} mechanical steps over {days} days; ahead: {} made \
+             ({} on a live set of its own), {} used, {} discarded",
+            ma.steps, ma.ahead.made, ma.ahead.on_new_systems, ma.ahead.used, ma.ahead.discarded
+        );
+        assert!(ma.steps < days, "no step spanned several days");
+        assert!(
+            ma.ahead.used > ma.steps / 2 && mb.ahead.made == 0,
+            "factorised ahead: {} of {} steps",
+            ma.ahead.used,
+            ma.steps
+        );
+        assert!(
+            ma.ahead.on_new_systems > 0,
+            "steps whose lifts are born in them are factorised ahead too"
+        );
+        assert_eq!(ma.steps, mb.steps, "mechanical steps");
+        let (labels, total, aperture, temperature) = differences(&a.0, &b.0);
+        assert!(
+            labels == 0 && aperture <= 1e-12 && temperature == 0.0,
+            "pours merged {merge_pours}, ahead and not: {labels} of {total} labels, \
+             apertures by {aperture:.3e} m, temperatures by {temperature:.3e} °C"
+        );
+    }
 }
 
 /// A run stopped at a midnight whose mechanical step ran beside the next

@@ -242,6 +242,20 @@ fn mechanics_step_out_of_range() {
 }
 
 #[test]
+fn merged_pours_need_longer_mechanical_steps() {
+    let text = format!("{BASE}\n[time]\nmechanics_merge_pours = true\n");
+    assert_eq!(
+        err(&text),
+        "models/x.toml:46:25: time.mechanics_merge_pours merges pours into mechanical steps of \
+         several days: it needs time.mechanics_max_step_days above 1"
+    );
+    let text =
+        format!("{BASE}\n[time]\nmechanics_max_step_days = 2\nmechanics_merge_pours = true\n");
+    let scene = Scene::from_toml_str(&text, ORIGIN).expect("merged pours with 2-day steps");
+    assert!(scene.time.mechanics_merge_pours);
+}
+
+#[test]
 fn bad_epoch_string() {
     let text = replaced(BASE, "epoch = 2024-01-01", "epoch = \"2024-13-01\"");
     assert_eq!(
