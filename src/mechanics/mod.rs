@@ -52,6 +52,8 @@ pub mod supports;
 pub use ahead::BirthsPlacement;
 pub use error::MechError;
 pub use frame::Frame;
-pub use model::{JointReading, MechState, MechStats, MechanicsModel, Supports, ZoneMinimum};
+pub use model::{
+    JointReading, MechState, MechStats, MechanicsModel, StepTemperatures, Supports, ZoneMinimum,
+};
 pub use settings::{ConcreteMechanics, JointMechanics, MechanicsSettings, RockMechanics};
 pub use supports::SupportError;

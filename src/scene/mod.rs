@@ -394,25 +394,26 @@ pub struct TimeStepping {
     /// mechanics takes one step over up to this many days (the joint
     /// history holds the last step's apertures in between); at most 30.
     /// A cooling stage's start or end alone does not end such a step (the
-    /// mechanics sees the pipes only through the temperatures at its ends).
-    /// Measured with 3: the small dam 151 against 264 steps, its apertures
-    /// at the grouting dates off by up to 0.578 mm (`tests/it/fast_path.rs`);
-    /// the Xiaowan-like arch's whole construction 569 against 1,109 steps,
-    /// 48 against 84 min, its deciding apertures at the planned dates within
-    /// 0.162 mm (`study compare`): for screening, not for planning.
+    /// mechanics sees the pipes only through the temperatures at its ends
+    /// and midnights: each day's change of temperature strains the concrete
+    /// at that day's modulus). Measured with 3: the small dam 151 against
+    /// 264 steps, its apertures at the grouting dates off by up to 0.464 mm
+    /// (`tests/it/fast_path.rs`); the demo 386 against 779 steps, 0.082 mm
+    /// at most at the planned dates; the Xiaowan-like arch's whole
+    /// construction 569 against 1,109 steps, 48 against 84 min, its deciding
+    /// apertures within 0.162 mm (`study compare`, measured before the days
+    /// inside a step were weighted): for screening, not for planning.
     pub mechanics_max_step_days: u32,
     /// With `mechanics_max_step_days` above 1, a day that pours no longer
     /// ends a mechanical step (default false: every pour day does): a lift
     /// poured inside a step is part of it from the step's start, born on its
-    /// own day (its modulus, creep and weight from then on) and stress-free
-    /// at its placement temperature (its strain over the step is the
-    /// temperature at the step's end less that; nodes it shares with older
-    /// concrete keep the step's start temperatures). An approximation for
-    /// speed on schedules that pour on most days, whose cost is the longer
-    /// steps' own in young concrete: measured with 3-day steps, the small
-    /// dam 130 against 151 steps, 0.114 mm more at most at the grouting
-    /// dates (`tests/it/fast_path.rs`); the demo 311 against 386 steps but
-    /// 0.918 against 0.171 mm from the exact path at the planned dates; the
+    /// own day (its modulus, creep and weight from then on) and strained
+    /// from the temperatures at its pour. An approximation for speed on
+    /// schedules that pour on most days, whose cost is the longer steps'
+    /// own over young concrete: measured with 3-day steps, the small dam 130
+    /// against 151 steps, 0.132 mm more at most at the grouting dates
+    /// (`tests/it/fast_path.rs`); the demo 311 against 386 steps but 0.694
+    /// against 0.082 mm from the exact path at the planned dates; the
     /// Xiaowan-like arch's first 300 days 105 against 140 steps.
     pub mechanics_merge_pours: bool,
     /// Last simulated date; default = 60 days after the last scheduled event.

@@ -37,7 +37,7 @@
 //! step's thread waits for the factorisations made ahead on the other
 //! core, and the thermal steps fill part of those waits.
 
-use crate::mechanics::MechanicsModel;
+use crate::mechanics::{MechanicsModel, StepTemperatures};
 use crate::thermal::ThermalRewind;
 use crate::vocab::Day;
 
@@ -95,7 +95,11 @@ impl Simulation<'_> {
         let mesh = self.mesh;
         let (m, stepped, ahead) = std::thread::scope(|s| {
             let worker = s.spawn(move || {
-                let temps = temps.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice()));
+                let temps = temps.as_ref().map(|(start, end)| StepTemperatures {
+                    start,
+                    inside: &job.inside,
+                    end,
+                });
                 let stepped = job.run(&mut m, mesh, temps);
                 (m, stepped)
             });

@@ -17,7 +17,7 @@ use std::sync::Arc;
 use chrono::NaiveDate;
 
 use crate::mechanics::ahead::{NextStep, PoursByDay};
-use crate::mechanics::{Frame, MechError, MechStats, MechanicsModel, Supports};
+use crate::mechanics::{Frame, MechError, MechStats, MechanicsModel, StepTemperatures, Supports};
 use crate::mesh::Mesh;
 use crate::scene::{Effect, Scene, TimeStepping};
 use crate::schedule::{DamLayout, Schedules, Warning, ZoneExtent, COOLING_CSV};
@@ -179,6 +179,9 @@ pub struct Simulation<'a> {
     /// start of the pending mechanical step and the temperatures then
     mech_t0: f64,
     mech_temps0: Option<Vec<f64>>,
+    /// the temperatures at the midnights inside the pending mechanical step
+    /// (one spanning several days), with their times
+    mech_temps_inside: Vec<(f64, Vec<f64>)>,
     mech_steps: usize,
     /// step the thermal model to the next midnight on this thread while the
     /// mechanical step of the day runs on another ([`beside`])
@@ -311,6 +314,7 @@ impl<'a> Simulation<'a> {
             steps: 0,
             mech_t0: 0.0,
             mech_temps0: None,
+            mech_temps_inside: Vec::new(),
             mech_steps: 0,
             thermal_beside: scene.solver.factor_ahead,
             thermal_ahead: false,
@@ -358,16 +362,12 @@ impl<'a> Simulation<'a> {
         } = events;
         self.apply_mechanics_events(self.day, &grouting, &pours);
         let mut restart = stage_change;
-        let born_inside = self.born_inside_step(&pours);
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
                 th.pour(block, lift, self.day, temp);
             }
             self.pours_done += 1;
             restart = true;
-        }
-        if let Some(was_live) = born_inside {
-            self.start_born_at_placement(&was_live);
         }
         if let Some(th) = self.thermal.as_mut() {
             restart |= th.update_stages(self.day);
@@ -383,31 +383,6 @@ impl<'a> Simulation<'a> {
             })?;
         }
         Ok(())
-    }
-
-    /// With pours merged into longer mechanical steps
-    /// (`time.mechanics_merge_pours`), a day that pours inside a pending
-    /// step: the thermal dofs live before its pours, for
-    /// [`Simulation::start_born_at_placement`]. None otherwise.
-    fn born_inside_step(&self, pours: &[(u32, u32, f64)]) -> Option<Vec<bool>> {
-        let inside = self.timeline.merge_pours && !pours.is_empty() && self.mech_temps0.is_some();
-        inside.then(|| self.thermal.as_ref().map(|th| th.live_dofs()))?
-    }
-
-    /// The pending mechanical step's start temperatures of the dofs the
-    /// day's pours made live (those not in `was_live`) set to their
-    /// temperatures now, the placement temperature: a lift born inside a
-    /// step is stress-free as poured, as it is when a step starts on its
-    /// pour day. Dofs shared with older concrete keep the step's start.
-    fn start_born_at_placement(&mut self, was_live: &[bool]) {
-        let (Some(start), Some(th)) = (self.mech_temps0.as_mut(), self.thermal.as_ref()) else {
-            return;
-        };
-        for ((t0, &now), &live) in start.iter_mut().zip(&th.state.temperature).zip(was_live) {
-            if !live {
-                *t0 = now;
-            }
-        }
     }
 
     /// The mechanical model's part of the day's events: the zones grouted,
@@ -487,6 +462,8 @@ impl<'a> Simulation<'a> {
             if self.day.fract() == 0.0 {
                 if stepped {
                     self.begin_mechanical_step();
+                } else {
+                    self.mark_mechanical_day();
                 }
                 self.record();
             }
@@ -606,6 +583,16 @@ impl<'a> Simulation<'a> {
     fn mark_mechanical_start(&mut self) {
         self.mech_t0 = self.day;
         self.mech_temps0 = self.thermal.as_ref().map(|th| th.state.temperature.clone());
+        self.mech_temps_inside.clear();
+    }
+
+    /// A midnight inside the pending mechanical step: its temperatures (after
+    /// the day's events) are kept for the step's thermal strain.
+    fn mark_mechanical_day(&mut self) {
+        if let (Some(_), Some(th)) = (&self.mechanics, &self.thermal) {
+            self.mech_temps_inside
+                .push((self.day, th.state.temperature.clone()));
+        }
     }
 
     fn mechanical_step(&mut self) -> Result<(), SimError> {
@@ -614,7 +601,11 @@ impl<'a> Simulation<'a> {
         };
         let job = self.mechanical_job();
         let temps = match (&self.mech_temps0, &self.thermal) {
-            (Some(b), Some(th)) => Some((b.as_slice(), th.state.temperature.as_slice())),
+            (Some(start), Some(th)) => Some(StepTemperatures {
+                start,
+                inside: &job.inside,
+                end: &th.state.temperature,
+            }),
             _ => None,
         };
         let stepped = job.run(&mut m, self.mesh, temps);
@@ -645,6 +636,7 @@ impl<'a> Simulation<'a> {
                 self.timeline.end_day.t(),
             ),
             epoch: self.scene.epoch,
+            inside: std::mem::take(&mut self.mech_temps_inside),
         }
     }
 
@@ -874,18 +866,20 @@ struct MechanicalJob {
     /// the step after it, for the factorisation ahead
     next: Option<NextStep>,
     epoch: Epoch,
+    /// the temperatures at the midnights inside it, with their times
+    inside: Vec<(f64, Vec<f64>)>,
 }
 
 impl MechanicalJob {
-    /// Steps `m`; `temps` are the thermal-dof temperatures at `t0` and `t1`.
+    /// Steps `m`; `temps` are the thermal-dof temperatures of the step.
     fn run(
-        self,
+        &self,
         m: &mut MechanicsModel,
         mesh: &Mesh,
-        temps: Option<(&[f64], &[f64])>,
+        temps: Option<StepTemperatures<'_>>,
     ) -> Result<(), SimError> {
-        m.set_next_step(self.next);
-        m.step(self.t0, self.t1, temps, self.level)
+        m.set_next_step(self.next.clone());
+        m.step_through(self.t0, self.t1, temps, self.level)
             .map_err(|source| {
                 let at = source
                     .pivot_dof()

@@ -204,6 +204,70 @@ fn with_the_usual_modulus_exponent_the_rate_is_one_plus_b() {
     );
 }
 
+/// A mechanical step spanning several days (`time.mechanics_max_step_days`
+/// above 1) strains the concrete by each day's change of temperature at
+/// that day's modulus, E(τ_k)/E(τ̄) α ΔT_k: a restrained block heated by
+/// hydration (no creep) takes in one 3-day step, given the temperatures at
+/// the midnights inside it, the stress of three daily steps, Σ E(τ_k) α
+/// ΔT_k/(1 − 2ν), to round-off. From its ends alone, α (T₃ − T₀) at the one
+/// mid-step modulus, it takes 10 % more compression: the first day's heat,
+/// most of the rise, counted at the stiffness of a day and a half.
+#[test]
+fn a_longer_step_strains_each_days_heat_at_that_days_modulus() {
+    use groutready::mechanics::StepTemperatures;
+    let mut sc = mech_scene(
+        "\"hydration\", \"thermal_strain\"",
+        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
+        "",
+    );
+    sc.concrete.adiabatic = Some(AdiabaticRise::Exponential {
+        theta0: 25.0,
+        m: 0.35,
+    });
+    let mesh = blocks_mesh(&sc);
+    let mut th =
+        ThermalModel::new(&mesh, &ThermalSettings::from_scene(&sc), vec![], None, None).unwrap();
+    let mechanics = MechanicsSettings::from_scene(&sc).unwrap();
+    let supports = rollers(&mesh, true, true, true);
+    let model = || {
+        let mut m = MechanicsModel::new(&mesh, &mechanics, &supports).unwrap();
+        m.pour(1, 1, 0.0);
+        m
+    };
+    th.pour(1, 1, 0.0, 15.0);
+    let mut temps = vec![th.state.temperature.clone()];
+    for day in 0..3 {
+        th.step(f64::from(day), f64::from(day + 1)).unwrap();
+        temps.push(th.state.temperature.clone());
+    }
+    let mut daily = model();
+    for day in 0..3 {
+        let (t0, t1) = (f64::from(day), f64::from(day + 1));
+        let pair = (
+            temps[day as usize].as_slice(),
+            temps[day as usize + 1].as_slice(),
+        );
+        daily.step(t0, t1, Some(pair), None).unwrap();
+    }
+    let inside = vec![(1.0, temps[1].clone()), (2.0, temps[2].clone())];
+    let mut through = model();
+    let step = StepTemperatures {
+        start: &temps[0],
+        inside: &inside,
+        end: &temps[3],
+    };
+    through.step_through(0.0, 3.0, Some(step), None).unwrap();
+    let mut ends = model();
+    ends.step(0.0, 3.0, Some((&temps[0], &temps[3])), None)
+        .unwrap();
+    let sigma = |m: &MechanicsModel| m.state.stress[0][0][0];
+    let (d, t, e) = (sigma(&daily), sigma(&through), sigma(&ends));
+    eprintln!("restrained block, 3 days of hydration: daily steps {d:.6e} Pa, one step through the days {t:.6e} Pa, from its ends {e:.6e} Pa");
+    assert!(d < -1e6, "compressed: {d}");
+    assert!((t - d).abs() <= 1e-10 * d.abs(), "{t} against {d}");
+    assert!(e < d && (e - d).abs() > 0.05 * d.abs(), "{e} against {d}");
+}
+
 /// A scene built in code without a value the mechanics needs is an error
 /// that names the key, never a panic (validation refuses it from a file).
 #[test]
