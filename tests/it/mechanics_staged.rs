@@ -96,23 +96,30 @@ fn self_weight_of_a_column_poured_lift_by_lift_is_statically_exact() {
     assert!(m.equilibrium_residual() < 1e-10);
 }
 
-/// Restrained block heated by hydration with an ageing modulus:
-/// σ = −α/(1−2ν) ∫ E(τ) dθ(τ); the staged driver integrates with E at
-/// mid-step ages (second order).
-fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64) {
+/// One block of one lift, 6 × 4 m, heated by hydration (θ0 = 25 °C,
+/// m = 0.35 a day) with its thermal strain, and that adiabatic rise.
+fn hydrating_block() -> (groutready::scene::Scene, AdiabaticRise) {
     let mut sc = mech_scene(
         "\"hydration\", \"thermal_strain\"",
         &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
         "",
     );
-    if let Some(m) = sc.concrete.modulus.as_mut() {
-        m.b = b_exponent;
-    }
     let rise = AdiabaticRise::Exponential {
         theta0: 25.0,
         m: 0.35,
     };
     sc.concrete.adiabatic = Some(rise.clone());
+    (sc, rise)
+}
+
+/// Restrained block heated by hydration with an ageing modulus:
+/// σ = −α/(1−2ν) ∫ E(τ) dθ(τ); the staged driver integrates with E at
+/// mid-step ages (second order).
+fn restrained_hydration_stress(dt: f64, days: f64, b_exponent: f64) -> (f64, f64) {
+    let (mut sc, rise) = hydrating_block();
+    if let Some(m) = sc.concrete.modulus.as_mut() {
+        m.b = b_exponent;
+    }
     let mesh = blocks_mesh(&sc);
     let thermal = ThermalSettings::from_scene(&sc);
     let mut th = ThermalModel::new(&mesh, &thermal, vec![], None, None).unwrap();
@@ -215,15 +222,7 @@ fn with_the_usual_modulus_exponent_the_rate_is_one_plus_b() {
 #[test]
 fn a_longer_step_strains_each_days_heat_at_that_days_modulus() {
     use groutready::mechanics::StepTemperatures;
-    let mut sc = mech_scene(
-        "\"hydration\", \"thermal_strain\"",
-        &blocks_geometry(1, 6.0, 4.0, 1, 2, 2),
-        "",
-    );
-    sc.concrete.adiabatic = Some(AdiabaticRise::Exponential {
-        theta0: 25.0,
-        m: 0.35,
-    });
+    let (sc, _) = hydrating_block();
     let mesh = blocks_mesh(&sc);
     let mut th =
         ThermalModel::new(&mesh, &ThermalSettings::from_scene(&sc), vec![], None, None).unwrap();
