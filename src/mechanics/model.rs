@@ -67,8 +67,6 @@ impl Supports {
     }
 }
 
-/// The joint read at one site: what a joint meter and a pressure cell
-/// set there would show.
 /// The thermal-dof temperatures a mechanical step reads: at its start
 /// (after that day's pours), at each midnight inside it with the day's time
 /// (a step spanning several days; none for a step of a day), and at its end.
@@ -79,6 +77,8 @@ pub struct StepTemperatures<'a> {
     pub end: &'a [f64],
 }
 
+/// The joint read at one site: what a joint meter and a pressure cell
+/// set there would show.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointReading {
     /// aperture \[m\]
@@ -752,7 +752,7 @@ impl MechanicsModel {
     /// [`MechanicsModel::step`] over a step that may span several days, with
     /// the temperatures at the midnights inside it as well: each day's change
     /// of temperature then strains the concrete at that day's modulus
-    /// ([`MechanicsModel::weighted_thermal_strain`]).
+    /// ([`MechanicsModel::day_weighted_strains`]).
     pub fn step_through(
         &mut self,
         t0: f64,
