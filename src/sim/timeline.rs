@@ -29,6 +29,11 @@ pub struct DayEvents {
 }
 
 impl DayEvents {
+    /// The lifts (block, lift) the day pours.
+    pub fn lifts(&self) -> Vec<(u32, u32)> {
+        self.pours.iter().map(|&(b, l, _)| (b, l)).collect()
+    }
+
     /// Whether the day ends a mechanical step that may span several days
     /// (`time.mechanics_max_step_days` > 1): it grouts, has its fields or
     /// rows read, or pours unless `merge_pours` (`time.mechanics_merge_pours`:
@@ -136,7 +141,7 @@ impl Timeline {
         self.days
             .range(first..last)
             .filter(|(_, ev)| !ev.pours.is_empty())
-            .map(|(&d, ev)| (d.t(), ev.pours.iter().map(|&(b, l, _)| (b, l)).collect()))
+            .map(|(&d, ev)| (d.t(), ev.lifts()))
             .collect()
     }
 
@@ -150,7 +155,7 @@ impl Timeline {
         self.days
             .range(next..=self.end_day)
             .find(|(_, ev)| !ev.pours.is_empty())
-            .map(|(&d, ev)| (d.t(), ev.pours.iter().map(|&(b, l, _)| (b, l)).collect()))
+            .map(|(&d, ev)| (d.t(), ev.lifts()))
     }
 
     /// The time of the first event day strictly after time `t`, or the end.
