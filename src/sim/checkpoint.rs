@@ -226,6 +226,26 @@ impl Simulation<'_> {
         self.checkpoints.push(ck);
     }
 
+    /// The first day from which a checkpoint is due after the current
+    /// day's (taken now if due): a mechanical step spanning several days
+    /// ends there (`Simulation::mechanical_step_due`), so the step
+    /// factorised ahead is foreseen to end there too.
+    pub(super) fn next_checkpoint_from(&self) -> Option<f64> {
+        let last = if self.checkpoint_due() {
+            Some(Day::containing(self.day))
+        } else {
+            self.checkpoints.last().map(|c| c.day)
+        };
+        let on = self
+            .checkpoint_on
+            .filter(|&d| d.t() > self.day && last.is_none_or(|l| l < d))
+            .map(Day::t);
+        let every = self
+            .checkpoint_every
+            .map(|every| last.map_or(Day(every), |l| l.plus(every)).t());
+        on.into_iter().chain(every).reduce(f64::min)
+    }
+
     /// Is a checkpoint due at the current day?
     pub(super) fn checkpoint_due(&self) -> bool {
         let last = self.checkpoints.last().map(|c| c.day);

@@ -632,8 +632,8 @@ impl<'a> Simulation<'a> {
                 &self.scene.time,
                 &self.timeline,
                 self.ladder,
-                t1,
-                self.timeline.end_day.t(),
+                (t1, self.timeline.end_day.t()),
+                self.next_checkpoint_from(),
             ),
             epoch: self.scene.epoch,
             inside: std::mem::take(&mut self.mech_temps_inside),
@@ -915,43 +915,55 @@ fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) 
 }
 
 /// The mechanical step after the one ending at `t1`, from the step ladder
-/// as it stands before its growth at `t1` (or, when mechanical steps may
-/// span several days, from the days with events), with the lifts poured
-/// at `t1` (and inside it, with pours merged); None at the end. The
-/// thermal ladder may still restart at `t1` on a cooling target reached;
-/// the step then differs and the factor made for it is discarded.
+/// as it stands before its growth at `t1`: its first midnight, or, when
+/// mechanical steps may span several days, its first midnight from the
+/// step's end foreseen from the days with events and from `checkpoint`
+/// (the first day from which the run's next checkpoint is due), with the
+/// lifts poured at `t1` (and inside it, with pours merged); None at the
+/// end. The thermal ladder may still restart at `t1` on a cooling target
+/// reached; the step then differs and the factor made for it is discarded.
 fn next_mechanical_step(
     time: &TimeStepping,
     timeline: &Timeline,
     mut ladder: Ladder,
-    t1: f64,
-    end: f64,
+    (t1, end): (f64, f64),
+    checkpoint: Option<f64>,
 ) -> Option<NextStep> {
     if t1 >= end || t1.fract() != 0.0 {
         return None;
     }
+    // the thermal ladder as the run moves it (`Simulation::apply_events`)
+    let events_restart = |ladder: &mut Ladder, t: f64| {
+        if timeline
+            .at(t)
+            .is_some_and(|e| e.stage_change || !e.pours.is_empty())
+        {
+            ladder.restart(time, t);
+        }
+    };
     ladder.grow(time);
-    let mut grouting = Vec::new();
-    if let Some(events) = timeline.at(t1) {
-        grouting = events.grouting.clone();
-        if events.stage_change || !events.pours.is_empty() {
-            ladder.restart(time, t1);
-        }
-    }
-    let t = if time.mechanics_max_step_days > 1 {
-        // a checkpoint day ends it sooner (`Simulation::mechanical_step_due`),
-        // and the factor made for it is then discarded like any made for
-        // an interval the step did not have
-        longer_step_end(time, timeline, t1, end)
+    events_restart(&mut ladder, t1);
+    let grouting = timeline
+        .at(t1)
+        .map(|e| e.grouting.clone())
+        .unwrap_or_default();
+    // `Simulation::mechanical_step_due`: a longer step ends at the first
+    // midnight a thermal step ends on from its foreseen end (where nothing
+    // happens the thermal steps grow past a day, and a step of 3 days may
+    // span 4) or a checkpoint's
+    let due = if time.mechanics_max_step_days > 1 {
+        longer_step_end(time, timeline, t1, end).min(checkpoint.unwrap_or(f64::INFINITY))
     } else {
-        let mut t = t1;
-        loop {
-            t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
-            ladder.grow(time);
-            if t.fract() == 0.0 || t >= end {
-                break t;
-            }
+        t1
+    };
+    let mut t = t1;
+    let t = loop {
+        t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
+        ladder.grow(time);
+        if (t.fract() == 0.0 && t >= due) || t >= end {
+            break t;
         }
+        events_restart(&mut ladder, t);
     };
     Some(NextStep {
         interval: (t1, t),
@@ -963,8 +975,9 @@ fn next_mechanical_step(
 
 /// The first mechanical step from the midnight `t` on whose span pours
 /// lifts: its start and its lifts by day, foreseen from the days with
-/// events as [`next_mechanical_step`] foresees its step (a checkpoint day
-/// may end a step sooner; the live set analysed for it is then unused).
+/// events alone (where [`next_mechanical_step`] also walks the thermal
+/// ladder and sees the next checkpoint: a step that ends elsewhere leaves
+/// the live set analysed for it unused, counted).
 fn first_births_from(
     time: &TimeStepping,
     timeline: &Timeline,
