@@ -236,25 +236,27 @@ impl Simulation<'_> {
         } else {
             self.checkpoints.last().map(|c| c.day)
         };
-        let on = self
-            .checkpoint_on
-            .filter(|&d| d.t() > self.day && last.is_none_or(|l| l < d))
-            .map(Day::t);
-        let every = self
-            .checkpoint_every
-            .map(|every| last.map_or(Day(every), |l| l.plus(every)).t());
-        on.into_iter().chain(every).reduce(f64::min)
+        self.checkpoint_due_after(last)
     }
 
     /// Is a checkpoint due at the current day?
     pub(super) fn checkpoint_due(&self) -> bool {
         let last = self.checkpoints.last().map(|c| c.day);
+        self.checkpoint_due_after(last)
+            .is_some_and(|d| self.day >= d)
+    }
+
+    /// The first day from which a checkpoint is due after the one of day
+    /// `last` (None: none taken yet): `checkpoint_on` if not passed, or
+    /// `checkpoint_every` days after `last`.
+    fn checkpoint_due_after(&self, last: Option<Day>) -> Option<f64> {
         let on = self
             .checkpoint_on
-            .is_some_and(|d| self.day >= d.t() && last.is_none_or(|l| l < d));
-        let Some(every) = self.checkpoint_every else {
-            return on;
-        };
-        on || self.day >= last.map_or(Day(every), |l| l.plus(every)).t()
+            .filter(|&d| last.is_none_or(|l| l < d))
+            .map(Day::t);
+        let every = self
+            .checkpoint_every
+            .map(|every| last.map_or(Day(every), |l| l.plus(every)).t());
+        on.into_iter().chain(every).reduce(f64::min)
     }
 }

@@ -353,21 +353,19 @@ impl<'a> Simulation<'a> {
         let Some(events) = self.timeline.at(self.day).cloned() else {
             return Ok(());
         };
+        let mut restart = events.restarts_ladder();
         let DayEvents {
             pours,
-            stage_change,
             snapshot,
             grouting,
-            observed: _,
+            ..
         } = events;
         self.apply_mechanics_events(self.day, &grouting, &pours);
-        let mut restart = stage_change;
         for (block, lift, temp) in pours {
             if let Some(th) = self.thermal.as_mut() {
                 th.pour(block, lift, self.day, temp);
             }
             self.pours_done += 1;
-            restart = true;
         }
         if let Some(th) = self.thermal.as_mut() {
             restart |= th.update_stages(self.day);
@@ -934,10 +932,7 @@ fn next_mechanical_step(
     }
     // the thermal ladder as the run moves it (`Simulation::apply_events`)
     let events_restart = |ladder: &mut Ladder, t: f64| {
-        if timeline
-            .at(t)
-            .is_some_and(|e| e.stage_change || !e.pours.is_empty())
-        {
+        if timeline.at(t).is_some_and(DayEvents::restarts_ladder) {
             ladder.restart(time, t);
         }
     };

@@ -34,6 +34,13 @@ impl DayEvents {
         self.pours.iter().map(|&(b, l, _)| (b, l)).collect()
     }
 
+    /// Whether the day restarts the thermal step ladder from its first
+    /// step: it pours or changes a cooling stage (a cooling target reached
+    /// restarts it too, which the timeline cannot know).
+    pub fn restarts_ladder(&self) -> bool {
+        self.stage_change || !self.pours.is_empty()
+    }
+
     /// Whether the day ends a mechanical step that may span several days
     /// (`time.mechanics_max_step_days` > 1): it grouts, has its fields or
     /// rows read, or pours unless `merge_pours` (`time.mechanics_merge_pours`:
