@@ -249,7 +249,7 @@ impl Simulation<'_> {
     /// The first day from which a checkpoint is due after the one of day
     /// `last` (None: none taken yet): `checkpoint_on` if not passed, or
     /// `checkpoint_every` days after `last`.
-    fn checkpoint_due_after(&self, last: Option<Day>) -> Option<f64> {
+    pub(super) fn checkpoint_due_after(&self, last: Option<Day>) -> Option<f64> {
         let on = self
             .checkpoint_on
             .filter(|&d| last.is_none_or(|l| l < d))

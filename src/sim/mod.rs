@@ -621,18 +621,23 @@ impl<'a> Simulation<'a> {
                 .flatten()
         });
         self.mech_steps += 1;
+        let next = next_mechanical_step(
+            &Foresight {
+                time: &self.scene.time,
+                timeline: &self.timeline,
+                end: self.timeline.end_day.t(),
+                checkpoint_after: &|day| self.checkpoint_due_after(Some(Day::containing(day))),
+            },
+            self.ladder,
+            t1,
+            self.next_checkpoint_from(),
+        );
         MechanicalJob {
             step: self.mech_steps,
             t0: self.mech_t0,
             t1,
             level,
-            next: next_mechanical_step(
-                &self.scene.time,
-                &self.timeline,
-                self.ladder,
-                (t1, self.timeline.end_day.t()),
-                self.next_checkpoint_from(),
-            ),
+            next,
             epoch: self.scene.epoch,
             inside: std::mem::take(&mut self.mech_temps_inside),
         }
@@ -912,86 +917,112 @@ fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) 
         .min(end)
 }
 
+/// How the run will move from a midnight on, as far as it can be foreseen:
+/// the thermal ladder restarted on the days that pour or change a stage
+/// (`Simulation::apply_events`; a cooling target reached inside a step
+/// restarts it too, unseen here), the mechanical steps ended where
+/// [`longer_step_end`] and the checkpoints end them
+/// (`Simulation::mechanical_step_due`).
+struct Foresight<'a> {
+    time: &'a TimeStepping,
+    timeline: &'a Timeline,
+    end: f64,
+    /// the first day from which a checkpoint is due after one taken on the
+    /// given day (`Simulation::checkpoint_due_after`)
+    checkpoint_after: &'a dyn Fn(f64) -> Option<f64>,
+}
+
+impl Foresight<'_> {
+    /// The end of the mechanical step from the midnight `t0` with the
+    /// `ladder` as it stands there after its growth, before the day's
+    /// events; the ladder is left as it stands at the step's end, and
+    /// `checkpoint` (the next one due) moves on past a checkpoint taken
+    /// there. A step ends at the first midnight a thermal step lands on
+    /// from its foreseen end (where nothing happens the thermal steps grow
+    /// past a day, and a step of 3 days may span 4) or a checkpoint's.
+    fn step_end(&self, ladder: &mut Ladder, t0: f64, checkpoint: &mut Option<f64>) -> f64 {
+        let (time, timeline) = (self.time, self.timeline);
+        let events_restart = |ladder: &mut Ladder, t: f64| {
+            if timeline.at(t).is_some_and(DayEvents::restarts_ladder) {
+                ladder.restart(time, t);
+            }
+        };
+        events_restart(ladder, t0);
+        let due = if time.mechanics_max_step_days > 1 {
+            longer_step_end(time, timeline, t0, self.end).min(checkpoint.unwrap_or(f64::INFINITY))
+        } else {
+            t0
+        };
+        let mut t = t0;
+        loop {
+            t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
+            ladder.grow(time);
+            if (t.fract() == 0.0 && t >= due) || t >= self.end {
+                break;
+            }
+            events_restart(ladder, t);
+        }
+        if checkpoint.is_some_and(|c| t >= c) {
+            *checkpoint = (self.checkpoint_after)(t);
+        }
+        t
+    }
+
+    /// The first mechanical step from the midnight `t` on whose span pours
+    /// lifts: its start and its lifts by day (the ladder and the next
+    /// checkpoint as they stand at `t`).
+    fn first_births_from(
+        &self,
+        mut ladder: Ladder,
+        t: f64,
+        mut checkpoint: Option<f64>,
+    ) -> Option<(f64, PoursByDay)> {
+        if self.time.mechanics_max_step_days <= 1 {
+            // a step every midnight: the first pour day from `t` on
+            let (day, lifts) = self.timeline.pours_after(t - 1.0)?;
+            return Some((day, vec![(day, lifts)]));
+        }
+        let mut start = t;
+        while start < self.end {
+            let step_end = self.step_end(&mut ladder, start, &mut checkpoint);
+            let pours = self.timeline.pours_within(start, step_end);
+            if !pours.is_empty() {
+                return Some((start, pours));
+            }
+            start = step_end;
+        }
+        None
+    }
+}
+
 /// The mechanical step after the one ending at `t1`, from the step ladder
-/// as it stands before its growth at `t1`: its first midnight, or, when
-/// mechanical steps may span several days, its first midnight from the
-/// step's end foreseen from the days with events and from `checkpoint`
-/// (the first day from which the run's next checkpoint is due), with the
-/// lifts poured at `t1` (and inside it, with pours merged); None at the
-/// end. The thermal ladder may still restart at `t1` on a cooling target
-/// reached; the step then differs and the factor made for it is discarded.
+/// as it stands before its growth at `t1` and `checkpoint` (the first day
+/// from which the run's next checkpoint is due): its interval
+/// ([`Foresight::step_end`]), with the lifts poured at `t1` (and inside
+/// it, with pours merged), and the first later step that pours; None at
+/// the end. The thermal ladder may still restart on a cooling target
+/// reached; the step then differs and what was made for it is discarded
+/// (counted).
 fn next_mechanical_step(
-    time: &TimeStepping,
-    timeline: &Timeline,
+    foresight: &Foresight<'_>,
     mut ladder: Ladder,
-    (t1, end): (f64, f64),
-    checkpoint: Option<f64>,
+    t1: f64,
+    mut checkpoint: Option<f64>,
 ) -> Option<NextStep> {
-    if t1 >= end || t1.fract() != 0.0 {
+    if t1 >= foresight.end || t1.fract() != 0.0 {
         return None;
     }
-    // the thermal ladder as the run moves it (`Simulation::apply_events`)
-    let events_restart = |ladder: &mut Ladder, t: f64| {
-        if timeline.at(t).is_some_and(DayEvents::restarts_ladder) {
-            ladder.restart(time, t);
-        }
-    };
-    ladder.grow(time);
-    events_restart(&mut ladder, t1);
+    let timeline = foresight.timeline;
+    ladder.grow(foresight.time);
     let grouting = timeline
         .at(t1)
         .map(|e| e.grouting.clone())
         .unwrap_or_default();
-    // `Simulation::mechanical_step_due`: a longer step ends at the first
-    // midnight a thermal step ends on from its foreseen end (where nothing
-    // happens the thermal steps grow past a day, and a step of 3 days may
-    // span 4) or a checkpoint's
-    let due = if time.mechanics_max_step_days > 1 {
-        longer_step_end(time, timeline, t1, end).min(checkpoint.unwrap_or(f64::INFINITY))
-    } else {
-        t1
-    };
-    let mut t = t1;
-    let t = loop {
-        t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
-        ladder.grow(time);
-        if (t.fract() == 0.0 && t >= due) || t >= end {
-            break t;
-        }
-        events_restart(&mut ladder, t);
-    };
+    let t = foresight.step_end(&mut ladder, t1, &mut checkpoint);
     Some(NextStep {
         interval: (t1, t),
         pours: timeline.pours_within(t1, t),
         grouting,
-        later_pours: first_births_from(time, timeline, t, end),
+        later_pours: foresight.first_births_from(ladder, t, checkpoint),
     })
-}
-
-/// The first mechanical step from the midnight `t` on whose span pours
-/// lifts: its start and its lifts by day, foreseen from the days with
-/// events alone (where [`next_mechanical_step`] also walks the thermal
-/// ladder and sees the next checkpoint: a step that ends elsewhere leaves
-/// the live set analysed for it unused, counted).
-fn first_births_from(
-    time: &TimeStepping,
-    timeline: &Timeline,
-    t: f64,
-    end: f64,
-) -> Option<(f64, PoursByDay)> {
-    if time.mechanics_max_step_days <= 1 {
-        // a step every midnight: the first pour day from `t` on
-        let (day, lifts) = timeline.pours_after(t - 1.0)?;
-        return Some((day, vec![(day, lifts)]));
-    }
-    let mut start = t;
-    while start < end {
-        let step_end = longer_step_end(time, timeline, start, end);
-        let pours = timeline.pours_within(start, step_end);
-        if !pours.is_empty() {
-            return Some((start, pours));
-        }
-        start = step_end;
-    }
-    None
 }

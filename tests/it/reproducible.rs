@@ -203,7 +203,8 @@ fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
 /// before's states, corrected exactly, so the bits may differ as for steps
 /// of a day): the same labels, the apertures within 1e-12 m, the
 /// temperatures to the bit; and with checkpoints every 10 days, every
-/// step's end foreseen (no factor made ahead is discarded).
+/// step's end foreseen (no factor made ahead is discarded), and the
+/// first later step that pours (no live set analysed ahead is discarded).
 #[test]
 fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
     // not a multiple of 3: checkpoints end steps the events do not
@@ -223,8 +224,16 @@ fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
         let days = inputs.scene.epoch.day(END_DATE.parse().unwrap()).t() as usize;
         eprintln!(
             "pours merged {merge_pours}: {} mechanical steps over {days} days; ahead: {} made \
-             ({} on a live set of its own), {} used, {} discarded",
-            ma.steps, ma.ahead.made, ma.ahead.on_new_systems, ma.ahead.used, ma.ahead.discarded
+             ({} on a live set of its own), {} used, {} discarded; live sets analysed ahead: \
+             {} started, {} used, {} discarded",
+            ma.steps,
+            ma.ahead.made,
+            ma.ahead.on_new_systems,
+            ma.ahead.used,
+            ma.ahead.discarded,
+            ma.pours_ahead.started,
+            ma.pours_ahead.used,
+            ma.pours_ahead.discarded
         );
         assert!(ma.steps < days, "no step spanned several days");
         assert!(
@@ -239,6 +248,12 @@ fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
         );
         // each step's end foreseen: past a longer thermal step, at a checkpoint
         assert_eq!(ma.ahead.discarded, 0, "factors made ahead for another step");
+        // and the steps after it walked alike to the first that pours
+        assert!(ma.pours_ahead.started > 0, "live sets analysed ahead");
+        assert_eq!(
+            ma.pours_ahead.discarded, 0,
+            "live sets analysed ahead for another step"
+        );
         assert_eq!(ma.steps, mb.steps, "mechanical steps");
         let (labels, total, aperture, temperature) = differences(&a.0, &b.0);
         assert!(
