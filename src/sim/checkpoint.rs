@@ -241,9 +241,13 @@ impl Simulation<'_> {
 
     /// Is a checkpoint due at the current day?
     pub(super) fn checkpoint_due(&self) -> bool {
-        let last = self.checkpoints.last().map(|c| c.day);
-        self.checkpoint_due_after(last)
-            .is_some_and(|d| self.day >= d)
+        self.checkpoint_due_from().is_some_and(|d| self.day >= d)
+    }
+
+    /// The first day from which the next checkpoint is due (None: no
+    /// checkpoint is taken).
+    pub(super) fn checkpoint_due_from(&self) -> Option<f64> {
+        self.checkpoint_due_after(self.checkpoints.last().map(|c| c.day))
     }
 
     /// The first day from which a checkpoint is due after the one of day

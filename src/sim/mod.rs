@@ -564,10 +564,8 @@ impl<'a> Simulation<'a> {
     /// [`DayEvents::ends_mechanical_step`]) and on a
     /// checkpoint day (a checkpoint holds no pending step).
     fn mechanical_step_due(&self, end: f64) -> bool {
-        let time = &self.scene.time;
-        time.mechanics_max_step_days <= 1
-            || self.day >= longer_step_end(time, &self.timeline, self.mech_t0, end)
-            || self.checkpoint_due()
+        let (time, t0) = (&self.scene.time, self.mech_t0);
+        self.day >= step_due_from(time, &self.timeline, (t0, end), self.checkpoint_due_from())
     }
 
     /// Remembers the start of the next mechanical step (after the day's events).
@@ -917,6 +915,24 @@ fn longer_step_end(time: &TimeStepping, timeline: &Timeline, t0: f64, end: f64) 
         .min(end)
 }
 
+/// The day from which the mechanical step started at the midnight `t0`
+/// ends at the first midnight the run lands on: any day with a step every
+/// midnight (−∞), else [`longer_step_end`] or the next `checkpoint` due,
+/// whichever comes first (a checkpoint holds no pending step). The run
+/// ([`Simulation::mechanical_step_due`]) and its foresight
+/// ([`Foresight::step_end`]) read this one rule.
+fn step_due_from(
+    time: &TimeStepping,
+    timeline: &Timeline,
+    (t0, end): (f64, f64),
+    checkpoint: Option<f64>,
+) -> f64 {
+    if time.mechanics_max_step_days <= 1 {
+        return f64::NEG_INFINITY;
+    }
+    longer_step_end(time, timeline, t0, end).min(checkpoint.unwrap_or(f64::INFINITY))
+}
+
 /// How the run will move from a midnight on, as far as it can be foreseen:
 /// the thermal ladder restarted on the days that pour or change a stage
 /// (`Simulation::apply_events`; a cooling target reached inside a step
@@ -948,11 +964,7 @@ impl Foresight<'_> {
             }
         };
         events_restart(ladder, t0);
-        let due = if time.mechanics_max_step_days > 1 {
-            longer_step_end(time, timeline, t0, self.end).min(checkpoint.unwrap_or(f64::INFINITY))
-        } else {
-            t0
-        };
+        let due = step_due_from(time, timeline, (t0, self.end), *checkpoint);
         let mut t = t0;
         loop {
             t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
