@@ -231,12 +231,12 @@ impl Simulation<'_> {
     /// ends there (`Simulation::mechanical_step_due`), so the step
     /// factorised ahead is foreseen to end there too.
     pub(super) fn next_checkpoint_from(&self) -> Option<f64> {
-        let last = if self.checkpoint_due() {
-            Some(Day::containing(self.day))
-        } else {
-            self.checkpoints.last().map(|c| c.day)
-        };
-        self.checkpoint_due_after(last)
+        match self.checkpoint_due_from() {
+            Some(due) if self.day >= due => {
+                self.checkpoint_due_after(Some(Day::containing(self.day)))
+            }
+            due => due,
+        }
     }
 
     /// Is a checkpoint due at the current day?

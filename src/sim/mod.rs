@@ -29,7 +29,7 @@ use crate::vocab::{Day, Epoch, JointState, ZoneId, ZonePoint};
 pub use checkpoint::{Checkpoint, History};
 
 pub use snapshot::Snapshot;
-use timeline::{snap, DayEvents, Ladder, Timeline};
+use timeline::{DayEvents, Ladder, Timeline};
 
 /// Receives the snapshots of a run, on the scene's snapshot dates.
 pub type SnapshotSink<'s> = dyn FnMut(&Snapshot) -> std::io::Result<()> + 's;
@@ -532,9 +532,7 @@ impl<'a> Simulation<'a> {
     /// One thermal step from `day` on the ladder (ending at the next event
     /// day at the latest); `day` becomes its end.
     fn thermal_step(&mut self) -> Result<(), SimError> {
-        let next = self.timeline.next_event_after(self.day);
-        let dt = self.ladder.next_step(&self.scene.time, self.day, next);
-        let t1 = snap(self.day + dt);
+        let t1 = (self.timeline).thermal_step_end(&self.scene.time, &self.ladder, self.day);
         if let Some(th) = self.thermal.as_mut() {
             if let Err(source) = th.step(self.day, t1) {
                 let at = source
@@ -967,7 +965,7 @@ impl Foresight<'_> {
         let due = step_due_from(time, timeline, (t0, self.end), *checkpoint);
         let mut t = t0;
         loop {
-            t = snap(t + ladder.next_step(time, t, timeline.next_event_after(t)));
+            t = timeline.thermal_step_end(time, ladder, t);
             ladder.grow(time);
             if (t.fract() == 0.0 && t >= due) || t >= self.end {
                 break;

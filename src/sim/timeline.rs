@@ -174,6 +174,13 @@ impl Timeline {
             .map(|(&d, _)| d.min(self.end_day).t())
             .unwrap_or(self.end_day.t())
     }
+
+    /// The end of the thermal step from `day` on `ladder`: its next step,
+    /// ending at the next event day at the latest, snapped to a midnight
+    /// within round-off. The run's step and its foresight's.
+    pub fn thermal_step_end(&self, cfg: &TimeStepping, ladder: &Ladder, day: f64) -> f64 {
+        snap(day + ladder.next_step(cfg, day, self.next_event_after(day)))
+    }
 }
 
 /// The step ladder state: the nominal step grows between events; an
