@@ -531,8 +531,9 @@ fn study_perf(
     groutready::study::perf(&scenes, &options)?;
     if defaults && !quick && options.resume.is_none() {
         // The large arch's whole construction with mechanics takes
-        // hours: its first 40 days (17 mechanical steps on a 171k-dof
-        // system) and its complete-dam steps; no exact-path rerun.
+        // over an hour on the exact path (README): its first 40 days (17
+        // mechanical steps on a 171k-dof system) and its complete-dam
+        // steps; no exact-path rerun.
         let large = [bundled("models/xiaowan_like.toml")];
         let options = groutready::study::PerfOptions {
             max_days: Some(options.max_days.unwrap_or(40.0)),

@@ -47,6 +47,17 @@ pub enum AppError {
     Sim(#[from] crate::sim::SimError),
     #[error("{0}: planning needs the `joints` effect (apertures come from the joint element); the scene simulates {1}")]
     PlanNeedsJoints(String, String),
+    /// `plan` without `--as-of` on schedules that mark no zone done takes
+    /// today as its as-of date; when every zone was due before it there is
+    /// nothing to plan, and the baseline would simulate the whole
+    /// construction for a report of history alone (well over an hour on
+    /// the large arch).
+    #[error("{grouting}: no zone is marked done, so the as-of date is today ({today}), and every zone was due by {last}: nothing is left to plan. Give --as-of DATE (the day the plan starts from; --horizon-days N to plan the weeks after it), or mark the grouted zones `done` in the status column; `groutready run` judges every zone on its planned date")]
+    NothingToPlan {
+        grouting: String,
+        today: chrono::NaiveDate,
+        last: chrono::NaiveDate,
+    },
     #[error(transparent)]
     Checkpoint(#[from] crate::sim::checkpoint::CheckpointError),
     #[error(transparent)]

@@ -85,6 +85,7 @@ pub fn plan(
         ));
     }
     let options = request.options(inputs);
+    nothing_left_by_today(inputs, request, &options)?;
     let epoch = scene.epoch;
     // The restart may not be later than this plan's own end.
     let end = options.end_day(epoch, &inputs.schedules);
@@ -129,6 +130,32 @@ pub fn plan(
         plan: out_plan.plan,
         checkpoints_kept,
     })
+}
+
+/// Refuses a plan whose as-of date came from the clock (no `--as-of`, no
+/// zone marked done) when every zone was due before it: refused before
+/// anything is simulated or written ([`AppError::NothingToPlan`]).
+fn nothing_left_by_today(
+    inputs: &Inputs,
+    request: &PlanRequest,
+    options: &PlanOptions,
+) -> Result<(), AppError> {
+    let grouting = &inputs.schedules.grouting;
+    if request.as_of.is_some() || grouting.iter().any(|g| g.done) {
+        return Ok(());
+    }
+    match grouting.iter().map(|g| g.planned).max() {
+        Some(last) if last < options.as_of => Err(AppError::NothingToPlan {
+            grouting: inputs
+                .schedules_dir
+                .join(schedule::GROUTING_CSV)
+                .display()
+                .to_string(),
+            today: options.as_of,
+            last,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Writes the run folder of a finished plan atomically (staged, then renamed

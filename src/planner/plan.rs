@@ -199,8 +199,9 @@ pub fn plan(
 
 /// Every zone of `grouting.csv` planned on or before `end`, judged by the
 /// rules on its planned date in a run's histories: what `plan` finds
-/// before its remedies, which `run` summarises (the large dam is run, not
-/// planned). By planned date, then zone.
+/// before its remedies, which `run` summarises (over the whole
+/// construction, where a plan covers its weeks). By planned date, then
+/// zone.
 pub fn judge_planned(
     scene: &Scene,
     mesh: &Mesh,

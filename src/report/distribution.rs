@@ -1,8 +1,9 @@
 //! The zones' deciding apertures on their planned grouting dates as one
 //! distribution, with the verdicts: what a whole run says of its joints
-//! (`groutready run` writes it into `run.txt`). The large arch's
-//! construction is run, not planned, and this is how its joints read:
-//! how many zones are closed, below the rule, or open by how much.
+//! (`groutready run` writes it into `run.txt`). A plan judges the zones
+//! of its weeks; a run of the large arch's whole construction judges all
+//! 749, and this is how its joints read: how many zones are closed, below
+//! the rule, or open by how much.
 
 use std::fmt;
 

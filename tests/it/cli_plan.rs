@@ -290,6 +290,50 @@ fn bad_planner_settings_and_a_scene_without_joints_are_refused() {
     assert_eq!(names(tmp.path()), vec!["bad.toml".to_string()]);
 }
 
+/// Schedules that mark no zone done leave the as-of date to the clock:
+/// once every zone was due before today the plan is refused before
+/// anything is simulated (the large arch's whole construction would run
+/// for a report of history alone), and it says how to give the date.
+/// (The small dam's zones are due in 2024, before any day this runs.)
+#[test]
+fn a_plan_with_nothing_left_to_grout_by_today_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let schedules = tmp.path().join("schedules");
+    copy_dir(&repo("schedules/small_dam"), &schedules);
+    let grouting = schedules.join("grouting.csv");
+    let text = std::fs::read_to_string(&grouting).unwrap();
+    assert!(text.contains(",done"), "the small dam marks zones done");
+    std::fs::write(&grouting, text.replace(",done", ",planned")).unwrap();
+    let scene = std::fs::read_to_string(repo(SCENE))
+        .unwrap()
+        .replace("../schedules/small_dam", &schedules.display().to_string());
+    let scene_path = tmp.path().join("undone.toml");
+    std::fs::write(&scene_path, scene).unwrap();
+    let o = bin()
+        .arg("plan")
+        .arg(&scene_path)
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("{}: no zone is marked done", grouting.display()))
+            && err.contains("nothing is left to plan")
+            && err.contains("--as-of DATE"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("simulating"),
+        "refused before simulating: {err}"
+    );
+    assert_eq!(
+        names(tmp.path()),
+        vec!["schedules".to_string(), "undone.toml".to_string()]
+    );
+}
+
 #[test]
 fn a_failed_plan_keeps_the_previous_run_folder() {
     let tmp = tempfile::tempdir().unwrap();
