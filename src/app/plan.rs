@@ -140,11 +140,11 @@ fn nothing_left_by_today(
     request: &PlanRequest,
     options: &PlanOptions,
 ) -> Result<(), AppError> {
-    let grouting = &inputs.schedules.grouting;
-    if request.as_of.is_some() || grouting.iter().any(|g| g.done) {
+    let schedules = &inputs.schedules;
+    if request.as_of.is_some() || planner::plan::as_of_after_done(schedules).is_some() {
         return Ok(());
     }
-    match grouting.iter().map(|g| g.planned).max() {
+    match schedules.grouting.iter().map(|g| g.planned).max() {
         Some(last) if last < options.as_of => Err(AppError::NothingToPlan {
             grouting: inputs
                 .schedules_dir

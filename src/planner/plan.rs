@@ -79,12 +79,17 @@ pub struct PlanOutput {
 /// The as-of date the schedules imply: the day after the last zone marked
 /// done, else `today` (the caller's clock: the library reads none).
 pub fn default_as_of(s: &Schedules, today: NaiveDate) -> NaiveDate {
+    as_of_after_done(s).unwrap_or(today)
+}
+
+/// The day after the last zone marked done (None: no zone is done, so the
+/// as-of date is the caller's clock unless given).
+pub fn as_of_after_done(s: &Schedules) -> Option<NaiveDate> {
     s.grouting
         .iter()
         .filter(|g| g.done)
         .map(|g| g.planned.succ_opt().unwrap_or(g.planned))
         .max()
-        .unwrap_or(today)
 }
 
 /// Plans `schedules` on `scene`. `restart` continues the baseline from a

@@ -532,7 +532,9 @@ impl<'a> Simulation<'a> {
     /// One thermal step from `day` on the ladder (ending at the next event
     /// day at the latest); `day` becomes its end.
     fn thermal_step(&mut self) -> Result<(), SimError> {
-        let t1 = (self.timeline).thermal_step_end(&self.scene.time, &self.ladder, self.day);
+        let t1 = self
+            .timeline
+            .thermal_step_end(&self.scene.time, &self.ladder, self.day);
         if let Some(th) = self.thermal.as_mut() {
             if let Err(source) = th.step(self.day, t1) {
                 let at = source
