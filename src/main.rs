@@ -115,8 +115,7 @@ impl PlanArgs {
     fn request(&self) -> app::plan::PlanRequest {
         app::plan::PlanRequest {
             as_of: self.as_of,
-            // The binary's clock decides "today"; the library reads none.
-            today: chrono::Local::now().date_naive(),
+            today: today(),
             horizon_days: self.horizon_days,
             from_scratch: self.from_scratch,
         }
@@ -204,6 +203,13 @@ enum StudyCommand {
         /// from there: a long run's late days without its first months.
         #[arg(long, value_name = "RUN")]
         resume: Option<PathBuf>,
+        /// The as-of date (YYYY-MM-DD) of the plan timed after a scene's
+        /// whole construction (default: as `plan`'s).
+        #[arg(long, value_parser = parse_date)]
+        as_of: Option<chrono::NaiveDate>,
+        /// That plan's horizon in days (default: as `plan`'s).
+        #[arg(long)]
+        horizon_days: Option<u32>,
     },
 }
 
@@ -347,6 +353,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                     complete_mechanics,
                     no_exact,
                     resume,
+                    as_of,
+                    horizon_days,
                 },
         } => {
             let options = groutready::study::PerfOptions {
@@ -355,6 +363,11 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
                 complete_mechanics,
                 exact: !no_exact,
                 resume,
+                plan: app::plan::PlanRequest {
+                    as_of,
+                    horizon_days,
+                    ..app::plan::PlanRequest::on(today())
+                },
             };
             study_perf(scenes, quick, options)
         }
@@ -482,10 +495,15 @@ fn print_plan(summary: &app::plan::PlanSummary) {
     println!("wrote {}", summary.out.display());
 }
 
+/// The binary's clock decides "today"; the library reads none.
+fn today() -> chrono::NaiveDate {
+    chrono::Local::now().date_naive()
+}
+
 /// `groutready study restart`: time the weekly update.
 fn study_restart(scene: Option<PathBuf>) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
-    groutready::study::restart::restart(&scene)?;
+    groutready::study::restart::restart(&scene, today())?;
     Ok(0)
 }
 

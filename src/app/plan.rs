@@ -15,8 +15,9 @@ use crate::vocab::ZoneId;
 use super::restart;
 use super::{io_err, run_text, AppError, Inputs, OutDir};
 
-/// Options of one plan.
-#[derive(Debug, Clone, Default)]
+/// Options of one plan. Made with [`PlanRequest::on`]: there is no
+/// default "today" (a made-up clock would plan from 1970).
+#[derive(Debug, Clone)]
 pub struct PlanRequest {
     /// the as-of date (default: [`planner::plan::default_as_of`] with `today`)
     pub as_of: Option<NaiveDate>,
@@ -30,6 +31,17 @@ pub struct PlanRequest {
 }
 
 impl PlanRequest {
+    /// The plan on the caller's clock `today`: the default as-of date and
+    /// horizon, restarted from the run folder's checkpoints.
+    pub fn on(today: NaiveDate) -> Self {
+        PlanRequest {
+            as_of: None,
+            today,
+            horizon_days: None,
+            from_scratch: false,
+        }
+    }
+
     /// The planner's options for `inputs`: the as-of date and horizon.
     pub fn options(&self, inputs: &Inputs) -> PlanOptions {
         PlanOptions {

@@ -106,7 +106,7 @@ pub fn parse_solvers(value: Option<&str>) -> Result<Vec<ThermalSolverKind>, Stud
 }
 
 /// What `perf` times besides each scene's staged history.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct PerfOptions {
     /// Stop each staged run after this many days.
     pub max_days: Option<f64>,
@@ -123,6 +123,9 @@ pub struct PerfOptions {
     /// count `max_days` from there: a long run's late days timed without
     /// its first months. One scene, no exact path, complete dam or plan.
     pub resume: Option<PathBuf>,
+    /// The plan timed after a whole construction (from scratch whatever
+    /// this says): its as-of date, horizon, and the caller's clock.
+    pub plan: crate::app::plan::PlanRequest,
 }
 
 /// Times the staged history of each scene (no files written), then the
@@ -141,6 +144,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
         complete_mechanics,
         exact,
         ref resume,
+        ref plan,
     } = *options;
     if resume.is_some() && scenes.len() != 1 {
         return Err(StudyError::ResumeScenes(scenes.len()));
@@ -220,7 +224,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
             && scene0.has(Effect::Joints)
             && !schedules.grouting.is_empty()
         {
-            println!("{:<22} {}", "", restart::plan_from_scratch(path)?);
+            println!("{:<22} {}", "", restart::plan_from_scratch(path, plan)?);
         }
     }
     Ok(())

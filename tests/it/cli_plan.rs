@@ -290,15 +290,10 @@ fn bad_planner_settings_and_a_scene_without_joints_are_refused() {
     assert_eq!(names(tmp.path()), vec!["bad.toml".to_string()]);
 }
 
-/// Schedules that mark no zone done leave the as-of date to the clock:
-/// once every zone was due before today the plan is refused before
-/// anything is simulated (the large arch's whole construction would run
-/// for a report of history alone), and it says how to give the date.
-/// (The small dam's zones are due in 2024, before any day this runs.)
-#[test]
-fn a_plan_with_nothing_left_to_grout_by_today_is_refused() {
-    let tmp = tempfile::tempdir().unwrap();
-    let schedules = tmp.path().join("schedules");
+/// The small dam with no zone marked done, in `dir`: its scene's path and
+/// its `grouting.csv`. Its zones are due in 2024, before any day this runs.
+fn small_dam_with_no_zone_done(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let schedules = dir.join("schedules");
     copy_dir(&repo("schedules/small_dam"), &schedules);
     let grouting = schedules.join("grouting.csv");
     let text = std::fs::read_to_string(&grouting).unwrap();
@@ -307,8 +302,19 @@ fn a_plan_with_nothing_left_to_grout_by_today_is_refused() {
     let scene = std::fs::read_to_string(repo(SCENE))
         .unwrap()
         .replace("../schedules/small_dam", &schedules.display().to_string());
-    let scene_path = tmp.path().join("undone.toml");
+    let scene_path = dir.join("undone.toml");
     std::fs::write(&scene_path, scene).unwrap();
+    (scene_path, grouting)
+}
+
+/// Schedules that mark no zone done leave the as-of date to the clock:
+/// once every zone was due before today the plan is refused before
+/// anything is simulated (the large arch's whole construction would run
+/// for a report of history alone), and it says how to give the date.
+#[test]
+fn a_plan_with_nothing_left_to_grout_by_today_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (scene_path, grouting) = small_dam_with_no_zone_done(tmp.path());
     let o = bin()
         .arg("plan")
         .arg(&scene_path)
@@ -331,6 +337,44 @@ fn a_plan_with_nothing_left_to_grout_by_today_is_refused() {
     assert_eq!(
         names(tmp.path()),
         vec!["schedules".to_string(), "undone.toml".to_string()]
+    );
+}
+
+/// `study perf` plans a scene after timing its whole construction, on the
+/// binary's clock: with nothing left to plan by today it says so and
+/// succeeds (the construction's figures stand), rather than planning
+/// every zone from a made-up date or failing after the run; given
+/// `--as-of` it times that plan.
+#[test]
+fn study_perf_says_why_it_times_no_plan_when_nothing_is_left() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (scene_path, grouting) = small_dam_with_no_zone_done(tmp.path());
+    let perf = |extra: &[&str]| {
+        let o = bin()
+            .args(["study", "perf"])
+            .arg(&scene_path)
+            .arg("--no-exact")
+            .args(extra)
+            .output()
+            .unwrap();
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{out}{err}");
+        out
+    };
+    let out = perf(&[]);
+    assert!(
+        out.contains(&format!(
+            "plan not timed: {}: no zone is marked done",
+            grouting.display()
+        )) && out.contains("nothing is left to plan"),
+        "{out}"
+    );
+    assert!(!out.contains("plan from scratch"), "{out}");
+    let out = perf(&["--as-of", "2024-05-20", "--horizon-days", "10"]);
+    assert!(
+        out.contains("plan from scratch") && !out.contains("plan not timed"),
+        "{out}"
     );
 }
 
