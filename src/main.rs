@@ -473,14 +473,20 @@ fn print_plan(summary: &app::plan::PlanSummary) {
         println!("note: {zone} is no longer groutable once the remedies are applied: {why}");
     }
     let st = &summary.plan.stats;
+    let search_days = summary.plan.settings.search_max_step_days;
     println!(
-        "simulated in {:.1} s{} + {} re-simulations in {:.1} s; {} checkpoints kept",
+        "simulated in {:.1} s{} + {} re-simulations in {:.1} s{}; {} checkpoints kept",
         st.baseline_seconds,
         st.restarted_from
             .map(|d| format!(" (restarted from {d})"))
             .unwrap_or_default(),
         st.resimulations,
         st.resimulation_seconds,
+        if search_days > 1 {
+            format!(" (the searches on mechanical steps of up to {search_days} days, verified on the scene's)")
+        } else {
+            String::new()
+        },
         summary.checkpoints_kept
     );
     if !st.reused.is_empty() {

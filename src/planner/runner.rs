@@ -32,6 +32,9 @@ pub struct Runner<'a> {
     /// the scene with its thermal effects alone, made on first use
     /// ([`Runner::simulate_temperatures`])
     thermal_scene: OnceLock<Scene>,
+    /// the scene the remedy searches run, made on first use
+    /// ([`Runner::search_scene`])
+    search_scene: OnceLock<Scene>,
     /// the scene's mechanical frame, which every re-simulation with
     /// mechanics is made on ([`Simulation::like`]): the baseline's, or the
     /// first re-simulation's when the runner was made from a run folder
@@ -142,6 +145,7 @@ impl<'a> Runner<'a> {
             lineages: Vec::new(),
             resimulations: AtomicUsize::new(0),
             thermal_scene: OnceLock::new(),
+            search_scene: OnceLock::new(),
             frame: OnceLock::new(),
         }
     }
@@ -167,6 +171,28 @@ impl<'a> Runner<'a> {
         self.simulate_with(schedules, span, None, &mut |_, _| {})
     }
 
+    /// The scene the remedy searches simulate: this runner's, its
+    /// mechanical steps lengthened to `planner.search_max_step_days` when
+    /// that is longer than the scene's own (an approximation of the
+    /// searches alone; the verification runs the scene itself).
+    pub fn search_scene(&self) -> &Scene {
+        let days = self.scene.planner.search_max_step_days;
+        if days <= self.scene.time.mechanics_max_step_days {
+            return self.scene;
+        }
+        self.search_scene.get_or_init(|| {
+            let mut s = self.scene.clone();
+            s.time.mechanics_max_step_days = days;
+            s
+        })
+    }
+
+    /// [`Runner::simulate`] of a remedy search: on [`Runner::search_scene`].
+    pub fn simulate_search(&self, schedules: &Schedules, span: &Span) -> Result<History, SimError> {
+        let sim = self.resimulate(self.search_scene(), schedules, span, Control::plain())?;
+        Ok(sim.history())
+    }
+
     /// [`Runner::simulate`] with the thermal effects alone: the same
     /// temperatures (the mechanics never feeds back into the heat
     /// equation), no stresses or apertures, at a fraction of the cost. For
@@ -186,7 +212,7 @@ impl<'a> Runner<'a> {
         Ok(sim.history())
     }
 
-    /// [`Runner::simulate`] that ends at the first midnight where `stop`
+    /// [`Runner::simulate_search`] that ends at the first midnight where `stop`
     /// says the rows so far suffice (checked at every midnight; its
     /// argument builds [`Simulation::history`] when asked). With
     /// `factor_ahead` it factorises each mechanical step ahead on the
@@ -207,7 +233,7 @@ impl<'a> Runner<'a> {
             factor_ahead,
             ..Control::plain()
         };
-        let sim = self.resimulate(self.scene, schedules, span, control)?;
+        let sim = self.resimulate(self.search_scene(), schedules, span, control)?;
         Ok(sim.history())
     }
 
@@ -333,15 +359,22 @@ impl<'a> Runner<'a> {
         Ok(sim)
     }
 
-    /// A run of `scene` (this runner's, or its thermal part) over
-    /// `schedules`, not started: its mechanics made on the runner's frame
-    /// when there is one, else built, and its frame kept.
+    /// A run of `scene` (this runner's, its search scene or its thermal
+    /// part) over `schedules`, not started: its mechanics made on the
+    /// runner's frame when there is one, else built, and its frame kept.
+    /// The search scene differs in its time steps alone, which no frame
+    /// reads.
     fn start<'s>(
         &'s self,
         scene: &'s Scene,
         schedules: &Schedules,
     ) -> Result<Simulation<'s>, SimError> {
-        if !scene.any_mechanical() || !std::ptr::eq(scene, self.scene) {
+        let framed = std::ptr::eq(scene, self.scene)
+            || self
+                .search_scene
+                .get()
+                .is_some_and(|s| std::ptr::eq(scene, s));
+        if !scene.any_mechanical() || !framed {
             return Simulation::new(scene, self.mesh, schedules);
         }
         if let Some(frame) = self.frame.get() {

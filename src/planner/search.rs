@@ -156,7 +156,7 @@ pub(super) fn simulate(
     if temperatures_only {
         runner.simulate_temperatures(s, span)
     } else {
-        runner.simulate(s, span)
+        runner.simulate_search(s, span)
     }
 }
 
@@ -1059,9 +1059,11 @@ fn delay_search(
     let first = days.clone().min().unwrap_or_default();
     let last = days.fold(Day(0), Day::max);
     let end = last.plus(s.max_delay_days as i64);
+    // every day, or every `search_max_step_days`-th: the run's step ends
+    let every = s.search_max_step_days.max(1) as usize;
     let span = Span {
         end_day: end,
-        observe: (first.0..=end.0).map(Day).collect(),
+        observe: (first.0..=end.0).step_by(every).map(Day).collect(),
     };
     let sched = edit::ungrout(base, &keys);
     (ctx.progress)(&format!(

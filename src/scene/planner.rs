@@ -66,6 +66,19 @@ pub struct PlannerSettings {
     /// Plan only the zones due within this many days of the as-of date
     /// (the simulation stops at the last of them); default: every zone.
     pub horizon_days: Option<u32>,
+    /// Longest mechanical step of the remedy searches' re-simulations
+    /// [whole days], default 1 (the scene's own steps). Above 1 an
+    /// approximation for speed, of the searches alone: their runs take
+    /// mechanical steps of up to this many days (as
+    /// `time.mechanics_max_step_days`, when the scene's own are shorter)
+    /// and the delay run reads every this-many-th day, so a delay is found
+    /// to this many days. The baseline and the run that verifies every
+    /// proposal together stay on the scene's own steps: every verdict the
+    /// plan reports is the exact path's, and a remedy that fails there is
+    /// strengthened and verified again as ever. What it costs in remedies
+    /// (not in verdicts) is measured in `tests/it/planner_search_steps.rs`
+    /// and docs/PERFORMANCE.md; at most 30.
+    pub search_max_step_days: u32,
 }
 
 impl Default for PlannerSettings {
@@ -91,6 +104,7 @@ impl Default for PlannerSettings {
             cost_per_day: 0.2,
             checkpoint_days: 14,
             horizon_days: None,
+            search_max_step_days: 1,
         }
     }
 }
@@ -222,6 +236,15 @@ impl PlannerSettings {
             return Err(Invalid::new(
                 key("checkpoint_days"),
                 "planner.checkpoint_days must be >= 1, got 0",
+            ));
+        }
+        if !(1..=30).contains(&self.search_max_step_days) {
+            return Err(Invalid::new(
+                key("search_max_step_days"),
+                format!(
+                    "planner.search_max_step_days must be a whole number of days in 1..=30, got {}",
+                    self.search_max_step_days
+                ),
             ));
         }
         Ok(())

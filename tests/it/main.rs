@@ -39,6 +39,7 @@ mod mesh_import;
 mod mesh_scenes;
 mod out_safety;
 mod planner_limits;
+mod planner_search_steps;
 mod planner_supercool;
 mod planner_together;
 mod report_files;

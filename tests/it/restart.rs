@@ -426,6 +426,93 @@ fn a_thermal_run_and_a_stopped_run_read_what_the_whole_run_reads() {
     );
 }
 
+/// `planner.search_max_step_days` lengthens the mechanical steps of the
+/// remedy searches' re-simulations alone: restarted from the same exact
+/// checkpoint, a search's run records fewer step ends than the exact
+/// re-simulation (the effect is there) and its apertures stay near it,
+/// while the runner's exact re-simulation (the verification's path) is the
+/// same bytes as with the setting off.
+#[test]
+fn the_searches_take_longer_steps_and_the_exact_runs_stay_exact() {
+    use groutready::planner::runner::{Runner, Span};
+    let inputs = inputs();
+    let base = run(&inputs, &inputs.schedules, None);
+    let remedied = remedy(&inputs);
+    let span = Span {
+        end_day: END,
+        observe: vec![],
+    };
+    let mut longer = inputs.scene.clone();
+    longer.planner.search_max_step_days = 3;
+    let plain = runner(&inputs, &base);
+    let searching = Runner::from_parts(
+        &longer,
+        &inputs.mesh,
+        inputs.schedules.clone(),
+        base.checkpoints.clone(),
+        base.history(),
+    );
+    let restart = searching.restart_day(&remedied, &span).unwrap();
+    let bytes = |h: &History| postcard::to_stdvec(h).unwrap();
+    let exact = plain.simulate(&remedied, &span).unwrap();
+    assert!(
+        bytes(&searching.simulate(&remedied, &span).unwrap()) == bytes(&exact),
+        "the exact re-simulation changed with the setting"
+    );
+    assert!(
+        bytes(&plain.simulate_search(&remedied, &span).unwrap()) == bytes(&exact),
+        "with the setting off a search runs the exact path"
+    );
+    let search = searching.simulate_search(&remedied, &span).unwrap();
+    // A day inside a longer step holds the step's apertures: the rows after
+    // the restart that repeat the row before, bit for bit, and the largest
+    // aperture difference where both record [mm].
+    let held = |h: &History| {
+        let apertures: Vec<Vec<u64>> = h
+            .joint_records
+            .rows
+            .iter()
+            .filter(|r| r.0 > restart)
+            .map(|r| r.1.iter().flatten().map(|s| s.aperture.to_bits()).collect())
+            .collect();
+        apertures.windows(2).filter(|w| w[0] == w[1]).count()
+    };
+    let mut diff_mm = 0.0f64;
+    for (a, b) in exact
+        .joint_records
+        .rows
+        .iter()
+        .zip(&search.joint_records.rows)
+    {
+        assert_eq!(a.0, b.0, "the same days recorded");
+        for (x, y) in a.1.iter().zip(&b.1) {
+            if let (Some(x), Some(y)) = (x, y) {
+                diff_mm = diff_mm.max(1e3 * (x.aperture - y.aperture).abs());
+            }
+        }
+    }
+    let rows = exact
+        .joint_records
+        .rows
+        .iter()
+        .filter(|r| r.0 > restart)
+        .count();
+    println!(
+        "search on 3-day steps from day {restart:?}: of {rows} days, {} held a step's apertures (exact: {}); apertures within {diff_mm:.3} mm",
+        held(&search),
+        held(&exact)
+    );
+    assert_eq!(held(&exact), 0, "the exact path steps every recorded day");
+    assert!(
+        3 * held(&search) > rows,
+        "{} of {rows} days held",
+        held(&search)
+    );
+    // the small dam's 3-day steps over its whole construction: 0.464 mm
+    // at the grouting dates (`tests/it/fast_path.rs`)
+    assert!(diff_mm > 0.0 && diff_mm < 0.464, "{diff_mm} mm");
+}
+
 /// The days of the checkpoints a thermal run of the small dam keeps, one
 /// every 30 days, none before `kept_from` once a later one is taken, and
 /// one on `on` (the temperatures alone: the checkpoints' days are what is

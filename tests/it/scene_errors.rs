@@ -242,6 +242,17 @@ fn mechanics_step_out_of_range() {
 }
 
 #[test]
+fn search_step_out_of_range() {
+    for bad in [0, 31] {
+        let text = format!("{BASE}\n[planner]\nsearch_max_step_days = {bad}\n");
+        assert_eq!(
+            err(&text),
+            format!("models/x.toml:46:24: planner.search_max_step_days must be a whole number of days in 1..=30, got {bad}")
+        );
+    }
+}
+
+#[test]
 fn merged_pours_need_longer_mechanical_steps() {
     let text = format!("{BASE}\n[time]\nmechanics_merge_pours = true\n");
     assert_eq!(
