@@ -173,8 +173,10 @@ impl<'a> Runner<'a> {
 
     /// The scene the remedy searches simulate: this runner's, its
     /// mechanical steps lengthened to `planner.search_max_step_days` when
-    /// that is longer than the scene's own (an approximation of the
-    /// searches alone; the verification runs the scene itself).
+    /// that is longer than the scene's own, with pours merged into them (a
+    /// dam poured every day would otherwise step every day): an
+    /// approximation of the searches alone; the verification runs the
+    /// scene itself.
     pub fn search_scene(&self) -> &Scene {
         let days = self.scene.planner.search_max_step_days;
         if days <= self.scene.time.mechanics_max_step_days {
@@ -183,6 +185,7 @@ impl<'a> Runner<'a> {
         self.search_scene.get_or_init(|| {
             let mut s = self.scene.clone();
             s.time.mechanics_max_step_days = days;
+            s.time.mechanics_merge_pours = true;
             s
         })
     }

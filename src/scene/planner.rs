@@ -69,15 +69,18 @@ pub struct PlannerSettings {
     /// Longest mechanical step of the remedy searches' re-simulations
     /// [whole days], default 1 (the scene's own steps). Above 1 an
     /// approximation for speed, of the searches alone: their runs take
-    /// mechanical steps of up to this many days (as
-    /// `time.mechanics_max_step_days`, when the scene's own are shorter)
-    /// and the delay run reads every this-many-th day, so a delay is found
-    /// to this many days. The baseline and the run that verifies every
-    /// proposal together stay on the scene's own steps: every verdict the
-    /// plan reports is the exact path's, and a remedy that fails there is
-    /// strengthened and verified again as ever. What it costs in remedies
-    /// (not in verdicts) is measured in `tests/it/planner_search_steps.rs`
-    /// and docs/PERFORMANCE.md; at most 30.
+    /// mechanical steps of up to this many days with the pours inside a
+    /// step merged into it (`time.mechanics_max_step_days` and
+    /// `mechanics_merge_pours`, when the scene's own steps are shorter: a
+    /// dam poured every day would step every day otherwise), and the delay
+    /// run reads every this-many-th day, so a delay is found to this many
+    /// days. The baseline and the run that verifies every proposal
+    /// together stay on the scene's own steps: every verdict the plan
+    /// reports is the exact path's, and a remedy that fails there is
+    /// strengthened and verified again as ever; what the searches' runs
+    /// read themselves (an option's aperture) is theirs. Measured in
+    /// `tests/it/planner_search_steps.rs` and docs/PERFORMANCE.md; at
+    /// most 30.
     pub search_max_step_days: u32,
 }
 
