@@ -34,7 +34,11 @@
 //!   drawn by the charts). That run is the plan's last and runs alone, so
 //!   it factorises each mechanical step ahead on the second core; the
 //!   searches' runs, two side by side, do not, but for the delay run,
-//!   which outlasts the supercooling search beside it.
+//!   which outlasts the supercooling search beside it. With
+//!   `planner.search_max_step_days` above 1 the searches' runs (not the
+//!   verification) take longer mechanical steps ([`Runner::search_scene`])
+//!   and the delay run reads every that-many-th day: the plan's verdicts
+//!   stay the verification's, on the scene's own steps.
 //!
 //! Verified by `tests/it/planner_*.rs`, `tests/it/demo_plan.rs`,
 //! `tests/it/cli_plan.rs` and `tests/it/restart.rs` (a thermal run's zone
