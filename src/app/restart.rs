@@ -42,7 +42,8 @@ const VERIFIED: &str = "verified";
 /// 2: cooling stages with water changes, warnings in the thermal state.
 /// 3: the remedy search kept (`search.bin`, `verified/`), `PlanStats::reused`.
 /// 4: `SupercoolOption::together` (neighbours supercooled together).
-const FORMAT: u32 = 4;
+/// 5: `PlannerSettings::search_max_step_days` (in `plan.bin`).
+const FORMAT: u32 = 5;
 
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.
