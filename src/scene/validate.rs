@@ -232,6 +232,13 @@ fn time(t: &TimeStepping, s: &Scene) -> Check {
              it needs time.mechanics_max_step_days above 1",
         ));
     }
+    if t.mechanics_merge_groutings && t.mechanics_max_step_days == 1 {
+        return Err(SceneError::invalid(
+            "time.mechanics_merge_groutings",
+            "time.mechanics_merge_groutings merges groutings into mechanical steps of several days: \
+             it needs time.mechanics_max_step_days above 1",
+        ));
+    }
     if !(0.5..=1.0).contains(&t.theta) {
         return Err(SceneError::invalid(
             "time.theta",

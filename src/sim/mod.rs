@@ -559,8 +559,8 @@ impl<'a> Simulation<'a> {
 
     /// Does the pending mechanical step end at this midnight? Always with
     /// `time.mechanics_max_step_days = 1`; otherwise when it spans that many
-    /// days, at the end, on a day that pours (unless pours are merged),
-    /// grouts or is read (snapshots, observed days;
+    /// days, at the end, on a day that pours or grouts (unless those are
+    /// merged) or is read (snapshots, observed days;
     /// [`DayEvents::ends_mechanical_step`]) and on a
     /// checkpoint day (a checkpoint holds no pending step).
     fn mechanical_step_due(&self, end: f64) -> bool {
@@ -904,8 +904,8 @@ impl MechanicalJob {
 }
 
 /// The end of a mechanical step started at the midnight `t0` that may span
-/// several days: `mechanics_max_step_days` on, the next day that pours
-/// (unless pours are merged), grouts or is read (snapshots, observed days;
+/// several days: `mechanics_max_step_days` on, the next day that pours or
+/// grouts (unless those are merged) or is read (snapshots, observed days;
 /// not a cooling stage's start or end alone,
 /// [`DayEvents::ends_mechanical_step`]), or the end,
 /// whichever comes first (every such day is a thermal step's end).

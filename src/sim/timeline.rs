@@ -42,18 +42,28 @@ impl DayEvents {
     }
 
     /// Whether the day ends a mechanical step that may span several days
-    /// (`time.mechanics_max_step_days` > 1): it grouts, has its fields or
-    /// rows read, or pours unless `merge_pours` (`time.mechanics_merge_pours`:
-    /// a lift poured inside a step is born there, [`Timeline::pours_within`]).
-    /// A cooling stage's start or end alone does not: it changes the pipes'
-    /// water, which the mechanics sees only through the temperatures at the
+    /// (`time.mechanics_max_step_days` > 1): it has its fields or rows
+    /// read, pours unless pours are `merged` (`time.mechanics_merge_pours`:
+    /// a lift poured inside a step is born there, [`Timeline::pours_within`])
+    /// or grouts unless groutings are (`time.mechanics_merge_groutings`: a
+    /// zone grouted inside a step is grouted at its start). A cooling
+    /// stage's start or end alone does not: it changes the pipes' water,
+    /// which the mechanics sees only through the temperatures at the
     /// step's ends.
-    pub fn ends_mechanical_step(&self, merge_pours: bool) -> bool {
-        (!merge_pours && !self.pours.is_empty())
-            || !self.grouting.is_empty()
+    pub fn ends_mechanical_step(&self, merged: Merged) -> bool {
+        (!merged.pours && !self.pours.is_empty())
+            || (!merged.groutings && !self.grouting.is_empty())
             || self.snapshot
             || self.observed
     }
+}
+
+/// The events that do not end a mechanical step spanning several days
+/// (`time.mechanics_merge_pours`, `time.mechanics_merge_groutings`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Merged {
+    pub pours: bool,
+    pub groutings: bool,
 }
 
 /// Events keyed by whole day.
@@ -61,9 +71,8 @@ impl DayEvents {
 pub struct Timeline {
     pub days: BTreeMap<Day, DayEvents>,
     pub end_day: Day,
-    /// pours do not end a mechanical step spanning several days
-    /// (`time.mechanics_merge_pours`)
-    pub merge_pours: bool,
+    /// the events that do not end a mechanical step spanning several days
+    pub merged: Merged,
 }
 
 impl Timeline {
@@ -108,7 +117,10 @@ impl Timeline {
         };
         let end = tl.end_day;
         tl.days.retain(|&d, _| d <= end);
-        tl.merge_pours = scene.time.mechanics_merge_pours;
+        tl.merged = Merged {
+            pours: scene.time.mechanics_merge_pours,
+            groutings: scene.time.mechanics_merge_groutings,
+        };
         tl
     }
 
@@ -130,7 +142,7 @@ impl Timeline {
         }
         self.days
             .range(next..=self.end_day)
-            .find(|(_, ev)| ev.ends_mechanical_step(self.merge_pours))
+            .find(|(_, ev)| ev.ends_mechanical_step(self.merged))
             .map_or(self.end_day.t(), |(&d, _)| d.t())
     }
 
@@ -371,7 +383,7 @@ mod tests {
             },
         );
         tl.days.insert(Day(20), stage);
-        assert!(!tl.days[&Day(2)].ends_mechanical_step(false));
+        assert!(!tl.days[&Day(2)].ends_mechanical_step(Merged::default()));
         assert_eq!(tl.next_event_after(0.0), 2.0, "a thermal step ends on it");
         assert_eq!(tl.next_mechanical_event_after(0.0), 5.0);
         assert_eq!(tl.next_mechanical_event_after(5.0), 9.0);
@@ -381,8 +393,8 @@ mod tests {
         assert_eq!(tl.next_mechanical_event_after(40.0), 40.0);
 
         // pours merged: day 5's pour is born inside the step from day 0
-        tl.merge_pours = true;
-        assert!(!tl.days[&Day(5)].ends_mechanical_step(true));
+        tl.merged.pours = true;
+        assert!(!tl.days[&Day(5)].ends_mechanical_step(tl.merged));
         assert_eq!(tl.next_mechanical_event_after(0.0), 9.0);
         assert_eq!(tl.pours_within(0.0, 9.0), vec![(5.0, vec![(0, 1)])]);
         assert_eq!(tl.pours_within(5.0, 9.0), vec![(5.0, vec![(0, 1)])]);
@@ -391,6 +403,13 @@ mod tests {
             "day 5 starts the next step"
         );
         assert!(tl.pours_within(6.0, 40.0).is_empty());
+
+        // groutings merged too: day 9's grouting is inside the step from
+        // day 0, which the snapshot ends
+        tl.merged.groutings = true;
+        assert!(!tl.days[&Day(9)].ends_mechanical_step(tl.merged));
+        assert_eq!(tl.next_mechanical_event_after(0.0), 12.0);
+        assert_eq!(tl.next_mechanical_event_after(12.0), 15.0, "a read day");
     }
 
     /// 0.1 d for 2 days, 0.25 d to day 7, then the ladder (capped at 1 d):

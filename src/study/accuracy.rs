@@ -786,6 +786,16 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
                 s.time.mechanics_merge_pours = true;
             },
         ));
+        l.push(Setting::new(
+            "mechanics 3 d, pours and groutings merged",
+            "groutings merged",
+            None,
+            |s| {
+                s.time.mechanics_max_step_days = 3;
+                s.time.mechanics_merge_pours = true;
+                s.time.mechanics_merge_groutings = true;
+            },
+        ));
         let element = scene.solver.element.other();
         let name = format!("element {}", element.name());
         l.push(other_form(name, "element", element, |s, e| {

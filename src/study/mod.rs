@@ -202,6 +202,7 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 exact_scene.solver.condense_rock = false;
                 exact_scene.time.mechanics_max_step_days = 1;
                 exact_scene.time.mechanics_merge_pours = false;
+                exact_scene.time.mechanics_merge_groutings = false;
                 let exact_run = Timed {
                     label: format!("{stem}/exact"),
                     scene: &exact_scene,

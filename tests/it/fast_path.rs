@@ -13,7 +13,8 @@
 //!   iteration's tolerance (below);
 //! - with mechanical steps of up to 3 days between events
 //!   (`time.mechanics_max_step_days = 3`, an opt-in approximation): fewer
-//!   steps, apertures within a measured bound.
+//!   steps, apertures within a measured bound; with the pours, then the
+//!   groutings, merged into those steps as well (opt-in approximations).
 //!
 //! Compared: the aperture and the state of every zone point and zone
 //! minimum on each zone's planned grouting date (ISSUE 12: within 0.01 mm,
@@ -52,6 +53,7 @@ struct Knobs {
     condense_rock: bool,
     mechanics_step_days: u32,
     merge_pours: bool,
+    merge_groutings: bool,
     layer_merging_age_days: u32,
 }
 
@@ -62,6 +64,7 @@ impl Knobs {
         condense_rock: true,
         mechanics_step_days: 1,
         merge_pours: false,
+        merge_groutings: false,
         layer_merging_age_days: 0,
     };
 }
@@ -73,6 +76,7 @@ fn run_with(knobs: Knobs) -> Run {
     inputs.scene.solver.condense_rock = knobs.condense_rock;
     inputs.scene.time.mechanics_max_step_days = knobs.mechanics_step_days;
     inputs.scene.time.mechanics_merge_pours = knobs.merge_pours;
+    inputs.scene.time.mechanics_merge_groutings = knobs.merge_groutings;
     inputs.scene.solver.layer_merging_age_days = knobs.layer_merging_age_days;
     let mut sim = Simulation::new(&inputs.scene, &inputs.mesh, &inputs.schedules).unwrap();
     let stats = sim.run(None, &mut |_, _| {}).unwrap();
@@ -350,3 +354,52 @@ fn merged_pours_against_the_exact_path_at_the_grouting_dates() {
 /// [`LONG_STEP_BOUND_M`]); this bound keeps the figure from growing
 /// unnoticed.
 const MERGED_POURS_BOUND_M: f64 = 0.2e-3;
+
+/// Groutings merged into 3-day mechanical steps with the pours
+/// (`time.mechanics_merge_groutings`, an opt-in approximation) against the
+/// exact path and against the steps that merge the pours alone: fewer
+/// steps, the apertures at the grouting dates within a measured bound. A
+/// zone grouted inside a step is grouted at its start, its layer taking
+/// the joint's state there.
+#[test]
+fn merged_groutings_against_the_exact_path_at_the_grouting_dates() {
+    let (exact, exact_stats, dates) = defaults();
+    let pours = Knobs {
+        mechanics_step_days: 3,
+        merge_pours: true,
+        ..Knobs::DEFAULTS
+    };
+    let (pours_merged, pours_stats, _) = run_with(pours);
+    let (merged, merged_stats, _) = run_with(Knobs {
+        merge_groutings: true,
+        ..pours
+    });
+    let (compared, largest, differ) = at_grouting_dates(&merged, exact, dates);
+    let (_, against_pours, _) = at_grouting_dates(&merged, &pours_merged, dates);
+    eprintln!(
+        "groutings and pours merged into 3-day steps: {} steps against {} (pours merged) and {} (exact); \
+         {compared} zone samples at their grouting dates: apertures differ by at most {:.4} mm from the exact path's, \
+         {:.4} mm from the steps merging pours alone, {differ} states differ",
+        merged_stats.steps,
+        pours_stats.steps,
+        exact_stats.steps,
+        1e3 * largest,
+        1e3 * against_pours,
+    );
+    assert!(
+        merged_stats.steps < pours_stats.steps,
+        "merged groutings end fewer steps"
+    );
+    assert_measured(largest, MERGED_GROUTINGS_EXACT_BOUND_M);
+    assert_measured(against_pours, MERGED_GROUTINGS_BOUND_M);
+}
+
+/// What merging groutings into 3-day steps adds at the grouting dates of
+/// the small dam, against the steps that merge the pours alone. Measured
+/// 0.116 mm (123 against 130 steps): a zone grouted inside a step reads
+/// the aperture of the step's start, up to two days of cooling earlier.
+/// This bound keeps the figure from growing unnoticed.
+const MERGED_GROUTINGS_BOUND_M: f64 = 0.2e-3;
+/// The same runs against the exact path: measured 0.581 mm, against the
+/// 0.472 mm of the pours merged alone.
+const MERGED_GROUTINGS_EXACT_BOUND_M: f64 = 0.7e-3;

@@ -196,9 +196,11 @@ fn the_thermal_steps_beside_the_mechanics_change_no_bit() {
 
 /// Mechanical steps that may span several days (`mechanics_max_step_days
 /// = 3`), with pours ending them and merged into them
-/// (`mechanics_merge_pours`), are factorised ahead on the second core too
-/// (the next step's end foreseen from the days with events, and the lifts
-/// born inside it), with the answer of a run that factorises each step on
+/// (`mechanics_merge_pours`), and groutings merged as well
+/// (`mechanics_merge_groutings`: a zone grouted inside a step changes the
+/// states the factor made ahead guessed, a change its correction takes),
+/// are factorised ahead on the second core too (the next step's end
+/// foreseen from the days with events, and the lifts born inside it), with the answer of a run that factorises each step on
 /// its own thread to round-off (a factor made ahead starts from the step
 /// before's states, corrected exactly, so the bits may differ as for steps
 /// of a day): the same labels, the apertures within 1e-12 m, the
@@ -211,8 +213,10 @@ fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
     const CHECKPOINT_DAYS: i64 = 10;
     let mut inputs = inputs();
     inputs.scene.time.mechanics_max_step_days = 3;
-    for merge_pours in [false, true] {
+    for (merge_pours, merge_groutings) in [(false, false), (true, false), (true, true)] {
         inputs.scene.time.mechanics_merge_pours = merge_pours;
+        inputs.scene.time.mechanics_merge_groutings = merge_groutings;
+        let merged = format!("pours merged {merge_pours}, groutings {merge_groutings}");
         let run = |ahead| {
             run_in_process(&inputs, |sim| {
                 sim.set_factor_ahead(ahead);
@@ -223,7 +227,7 @@ fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
         let (ma, mb) = (a.2.mechanics.unwrap(), b.2.mechanics.unwrap());
         let days = inputs.scene.epoch.day(END_DATE.parse().unwrap()).t() as usize;
         eprintln!(
-            "pours merged {merge_pours}: {} mechanical steps over {days} days; ahead: {} made \
+            "{merged}: {} mechanical steps over {days} days; ahead: {} made \
              ({} on a live set of its own), {} used, {} discarded; live sets analysed ahead: \
              {} started, {} used, {} discarded",
             ma.steps,
@@ -258,7 +262,7 @@ fn longer_mechanical_steps_factorised_ahead_agree_to_round_off() {
         let (labels, total, aperture, temperature) = differences(&a.0, &b.0);
         assert!(
             labels == 0 && aperture <= 1e-12 && temperature == 0.0,
-            "pours merged {merge_pours}, ahead and not: {labels} of {total} labels, \
+            "{merged}, ahead and not: {labels} of {total} labels, \
              apertures by {aperture:.3e} m, temperatures by {temperature:.3e} °C"
         );
     }

@@ -253,17 +253,27 @@ fn search_step_out_of_range() {
 }
 
 #[test]
-fn merged_pours_need_longer_mechanical_steps() {
-    let text = format!("{BASE}\n[time]\nmechanics_merge_pours = true\n");
-    assert_eq!(
-        err(&text),
-        "models/x.toml:46:25: time.mechanics_merge_pours merges pours into mechanical steps of \
-         several days: it needs time.mechanics_max_step_days above 1"
-    );
-    let text =
-        format!("{BASE}\n[time]\nmechanics_max_step_days = 2\nmechanics_merge_pours = true\n");
-    let scene = Scene::from_toml_str(&text, ORIGIN).expect("merged pours with 2-day steps");
-    assert!(scene.time.mechanics_merge_pours);
+fn merged_pours_and_groutings_need_longer_mechanical_steps() {
+    for (key, what, column) in [
+        ("mechanics_merge_pours", "pours", 25),
+        ("mechanics_merge_groutings", "groutings", 29),
+    ] {
+        let text = format!("{BASE}\n[time]\n{key} = true\n");
+        assert_eq!(
+            err(&text),
+            format!(
+                "models/x.toml:46:{column}: time.{key} merges {what} into mechanical steps of \
+                 several days: it needs time.mechanics_max_step_days above 1"
+            )
+        );
+        let text = format!("{BASE}\n[time]\nmechanics_max_step_days = 2\n{key} = true\n");
+        let scene = Scene::from_toml_str(&text, ORIGIN).expect("merged with 2-day steps");
+        let merged = [
+            scene.time.mechanics_merge_pours,
+            scene.time.mechanics_merge_groutings,
+        ];
+        assert_eq!(merged.iter().filter(|&&m| m).count(), 1, "{key}");
+    }
 }
 
 #[test]
