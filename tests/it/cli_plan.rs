@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::process::Output;
 
-use crate::common::{bin, copy_dir, repo};
+use crate::common::{bin, copy_dir, repo, small_dam_scene_text};
 
 fn names(dir: &Path) -> Vec<String> {
     let mut n: Vec<String> = std::fs::read_dir(dir)
@@ -257,10 +257,7 @@ fn bad_schedules_are_refused_with_their_exact_error_and_nothing_is_written() {
 #[test]
 fn bad_planner_settings_and_a_scene_without_joints_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(repo(SCENE)).unwrap().replace(
-        "../schedules/small_dam",
-        &repo("schedules/small_dam").display().to_string(),
-    );
+    let text = small_dam_scene_text(&repo("schedules/small_dam"));
     let bad = format!("{text}\n[planner]\nmin_aperture_mm = -0.5\n");
     let scene = tmp.path().join("bad.toml");
     std::fs::write(&scene, bad).unwrap();
@@ -299,9 +296,7 @@ fn small_dam_with_no_zone_done(dir: &Path) -> (std::path::PathBuf, std::path::Pa
     let text = std::fs::read_to_string(&grouting).unwrap();
     assert!(text.contains(",done"), "the small dam marks zones done");
     std::fs::write(&grouting, text.replace(",done", ",planned")).unwrap();
-    let scene = std::fs::read_to_string(repo(SCENE))
-        .unwrap()
-        .replace("../schedules/small_dam", &schedules.display().to_string());
+    let scene = small_dam_scene_text(&schedules);
     let scene_path = dir.join("undone.toml");
     std::fs::write(&scene_path, scene).unwrap();
     (scene_path, grouting)

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{bin, copy_dir, repo};
+use crate::common::{bin, copy_dir, repo, small_dam_scene_text};
 
 /// Nothing but `keep` may exist in `dir` (no staging folder left behind).
 fn only(dir: &Path, keep: &[&str]) {
@@ -514,17 +514,10 @@ fn run_again(scene: &Path, out: &Path, args: &[&str]) -> String {
 /// The small dam with joints in `dir`, its first restart point after
 /// months of histories and a snapshot (day 120).
 fn small_dam_restarting_at_day_120(dir: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(repo("models/small_dam_joints.toml"))
-        .unwrap()
-        .replace(
-            "../schedules/small_dam\"",
-            &format!("{}\"", repo("schedules/small_dam").display()),
-        )
-        .replace(
-            "snapshots = [2024-07-01]",
-            "snapshots = [2024-01-05, 2024-03-01, 2024-07-01]",
-        )
-        + "\n[planner]\ncheckpoint_days = 120\n";
+    let text = small_dam_scene_text(&repo("schedules/small_dam")).replace(
+        "snapshots = [2024-07-01]",
+        "snapshots = [2024-01-05, 2024-03-01, 2024-07-01]",
+    ) + "\n[planner]\ncheckpoint_days = 120\n";
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
     scene

@@ -11,7 +11,7 @@
 //! The runs' own difference is tested in
 //! `restart::the_searches_take_longer_steps_and_the_exact_runs_stay_exact`.
 
-use crate::common::{bin, copy_dir, repo, small_plan};
+use crate::common::{bin, copy_dir, repo, small_dam_scene_text, small_plan};
 
 #[test]
 fn searches_on_longer_steps_keep_the_exact_verdicts_and_remedies() {
@@ -20,13 +20,12 @@ fn searches_on_longer_steps_keep_the_exact_verdicts_and_remedies() {
     let tmp = tempfile::tempdir().unwrap();
     let schedules = tmp.path().join("schedules");
     copy_dir(&repo("schedules/small_dam"), &schedules);
-    let text = std::fs::read_to_string(repo("models/small_dam_joints.toml")).unwrap();
+    let text = small_dam_scene_text(&schedules);
     assert!(
         !text.contains("[planner]"),
         "the scene's planner table is added here"
     );
-    let scene = text.replace("../schedules/small_dam", &schedules.display().to_string())
-        + "\n[planner]\nsearch_max_step_days = 3\n";
+    let scene = text + "\n[planner]\nsearch_max_step_days = 3\n";
     let scene_path = tmp.path().join("searched.toml");
     std::fs::write(&scene_path, scene).unwrap();
     let out = tmp.path().join("plan");

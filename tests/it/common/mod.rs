@@ -201,6 +201,16 @@ pub fn repo(rel: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
+/// The text of `models/small_dam_joints.toml` with its schedules read from
+/// `schedules` (the repository's, or a copy a test edits), for a test that
+/// writes the scene elsewhere, often with a table added.
+pub fn small_dam_scene_text(schedules: &std::path::Path) -> String {
+    let text = std::fs::read_to_string(repo("models/small_dam_joints.toml")).unwrap();
+    let from = "\"../schedules/small_dam\"";
+    assert!(text.contains(from), "the small dam reads {from}");
+    text.replace(from, &format!("\"{}\"", schedules.display()))
+}
+
 /// Copies the files and folders of `from` into `to` (created).
 pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
     std::fs::create_dir_all(to).unwrap();
