@@ -318,34 +318,44 @@ const MERGING_BOUND_M: f64 = 0.6e-3;
 /// its birth count nothing in the step's day-weighted strain).
 #[test]
 fn merged_pours_against_the_exact_path_at_the_grouting_dates() {
-    let (exact, exact_stats, dates) = defaults();
     let three_days = Knobs {
         mechanics_step_days: 3,
         ..Knobs::DEFAULTS
     };
-    let (long, long_stats, _) = run_with(three_days);
-    let (merged, merged_stats, _) = run_with(Knobs {
+    let merged = Knobs {
         merge_pours: true,
         ..three_days
-    });
+    };
+    let bounds = (LONG_STEP_BOUND_M, MERGED_POURS_BOUND_M);
+    merging_measured("pours", three_days, merged, bounds);
+}
+
+/// The run with `merged` against the exact path and against the run with
+/// `before` (the same without the events merged), at the grouting dates:
+/// fewer steps, and the differences within `bounds` (from the exact path,
+/// from `before`), both measured.
+fn merging_measured(what: &str, before: Knobs, merged: Knobs, bounds: (f64, f64)) {
+    let (exact, exact_stats, dates) = defaults();
+    let (unmerged, unmerged_stats, _) = run_with(before);
+    let (merged, merged_stats, _) = run_with(merged);
     let (compared, largest, differ) = at_grouting_dates(&merged, exact, dates);
-    let (_, against_long, _) = at_grouting_dates(&merged, &long, dates);
+    let (_, added, _) = at_grouting_dates(&merged, &unmerged, dates);
     eprintln!(
-        "pours merged into 3-day steps: {} steps against {} (3-day steps ending on pours) and {} (exact); \
+        "{what} merged into 3-day steps: {} steps against {} without and {} on the exact path; \
          {compared} zone samples at their grouting dates: apertures differ by at most {:.4} mm from the exact path's, \
-         {:.4} mm from the 3-day steps', {differ} states differ",
+         {:.4} mm from the run without, {differ} states differ",
         merged_stats.steps,
-        long_stats.steps,
+        unmerged_stats.steps,
         exact_stats.steps,
         1e3 * largest,
-        1e3 * against_long,
+        1e3 * added,
     );
     assert!(
-        merged_stats.steps < long_stats.steps,
-        "merged pours end fewer steps"
+        merged_stats.steps < unmerged_stats.steps,
+        "merged {what} end fewer steps"
     );
-    assert_measured(largest, LONG_STEP_BOUND_M);
-    assert_measured(against_long, MERGED_POURS_BOUND_M);
+    assert_measured(largest, bounds.0);
+    assert_measured(added, bounds.1);
 }
 
 /// What merging pours into 3-day steps adds at the grouting dates of the
@@ -363,35 +373,17 @@ const MERGED_POURS_BOUND_M: f64 = 0.2e-3;
 /// the joint's state there.
 #[test]
 fn merged_groutings_against_the_exact_path_at_the_grouting_dates() {
-    let (exact, exact_stats, dates) = defaults();
     let pours = Knobs {
         mechanics_step_days: 3,
         merge_pours: true,
         ..Knobs::DEFAULTS
     };
-    let (pours_merged, pours_stats, _) = run_with(pours);
-    let (merged, merged_stats, _) = run_with(Knobs {
+    let merged = Knobs {
         merge_groutings: true,
         ..pours
-    });
-    let (compared, largest, differ) = at_grouting_dates(&merged, exact, dates);
-    let (_, against_pours, _) = at_grouting_dates(&merged, &pours_merged, dates);
-    eprintln!(
-        "groutings and pours merged into 3-day steps: {} steps against {} (pours merged) and {} (exact); \
-         {compared} zone samples at their grouting dates: apertures differ by at most {:.4} mm from the exact path's, \
-         {:.4} mm from the steps merging pours alone, {differ} states differ",
-        merged_stats.steps,
-        pours_stats.steps,
-        exact_stats.steps,
-        1e3 * largest,
-        1e3 * against_pours,
-    );
-    assert!(
-        merged_stats.steps < pours_stats.steps,
-        "merged groutings end fewer steps"
-    );
-    assert_measured(largest, MERGED_GROUTINGS_EXACT_BOUND_M);
-    assert_measured(against_pours, MERGED_GROUTINGS_BOUND_M);
+    };
+    let bounds = (MERGED_GROUTINGS_EXACT_BOUND_M, MERGED_GROUTINGS_BOUND_M);
+    merging_measured("groutings and pours", pours, merged, bounds);
 }
 
 /// What merging groutings into 3-day steps adds at the grouting dates of
