@@ -188,6 +188,8 @@ pub struct RunSummary {
     pub reopening: Option<crate::report::Reopening>,
     /// the date an interrupted run was continued from ([`resume`])
     pub resumed_from: Option<chrono::NaiveDate>,
+    /// the scene's opt-in approximations of the mechanics (empty: exact)
+    pub approximations: Vec<crate::scene::Approximation>,
 }
 
 /// Simulates to the end, keeping a restart point at the checkpoints
@@ -324,6 +326,7 @@ pub fn run(
         snapshots,
         grouting,
         reopening,
+        approximations: inputs.scene.approximations(),
     })
 }
 
@@ -374,6 +377,10 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
             m.steps, m.symbolic, m.numeric, m.contact_iterations, m.block_pivoting_steps, m.max_dofs, m.max_free_dofs
         );
         s += &m.kept_tension_warning();
+        s += &format!(
+            "mechanics approximations: {}\n",
+            crate::scene::approximation::describe(&inputs.scene.approximations())
+        );
     }
     for w in inputs.warnings.iter().chain(&stats.warnings) {
         s += &format!("warning: {w}\n");

@@ -43,7 +43,8 @@ const VERIFIED: &str = "verified";
 /// 3: the remedy search kept (`search.bin`, `verified/`), `PlanStats::reused`.
 /// 4: `SupercoolOption::together` (neighbours supercooled together).
 /// 5: `PlannerSettings::search_max_step_days` (in `plan.bin`).
-const FORMAT: u32 = 5;
+/// 6: `Plan::approximations`.
+const FORMAT: u32 = 6;
 
 /// What decides whether a checkpoint is valid: the scene without its
 /// `[planner]` table (which changes no simulated value), and the program.

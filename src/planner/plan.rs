@@ -180,6 +180,7 @@ pub fn plan(
         histories,
         meters,
         warnings: Vec::new(),
+        approximations: scene.approximations(),
         stats: PlanStats {
             baseline_seconds,
             restarted_from,

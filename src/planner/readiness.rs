@@ -337,6 +337,10 @@ pub struct Plan {
     /// inputs the plan accepted but that look wrong (the report repeats them)
     #[serde(default)]
     pub warnings: Vec<crate::schedule::Warning>,
+    /// the opt-in approximations the scene's mechanics was computed with
+    /// (empty: the exact path; the reports say which)
+    #[serde(default)]
+    pub approximations: Vec<crate::scene::Approximation>,
 }
 
 impl Plan {

@@ -1,6 +1,7 @@
 //! `report.json`: the whole plan for other tools, pretty-printed: scene,
 //! as-of date, zone counts, every zone's readiness, the meter readings with
-//! their error statistics per joint, and how the plan was computed.
+//! their error statistics per joint, and how the plan was computed (with which
+//! approximations of the mechanics, if any).
 
 use chrono::NaiveDate;
 use serde::Serialize;
@@ -8,6 +9,7 @@ use serde::Serialize;
 use super::meters::{self, MeterError};
 use super::summary::Summary;
 use crate::planner::{MeterComparison, Plan, PlanStats, ZoneReadiness};
+use crate::scene::Approximation;
 
 /// The document written to `report.json`.
 #[derive(Debug, Serialize)]
@@ -19,6 +21,8 @@ pub struct ReportJson<'a> {
     pub meters: &'a [MeterComparison],
     pub meter_errors: Vec<MeterError>,
     pub stats: &'a PlanStats,
+    /// the opt-in approximations of the mechanics (empty: the exact path)
+    pub approximations: &'a [Approximation],
 }
 
 impl<'a> ReportJson<'a> {
@@ -31,6 +35,7 @@ impl<'a> ReportJson<'a> {
             meters: &plan.meters,
             meter_errors: meters::errors(&plan.meters),
             stats: &plan.stats,
+            approximations: &plan.approximations,
         }
     }
 }

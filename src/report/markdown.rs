@@ -74,6 +74,9 @@ fn summary(out: &mut String, plan: &Plan) {
         "- Computed in {:.1} s: baseline simulation {:.1} s ({from}), {} re-simulations for remedies {:.1} s{reused}\n",
         p.total_seconds, p.baseline_seconds, p.resimulations, p.resimulation_seconds
     );
+    if let Some(caution) = words::approximations_caution(&plan.approximations) {
+        let _ = writeln!(out, "> **{caution}**\n");
+    }
 }
 
 fn flagged(out: &mut String, plan: &Plan) {

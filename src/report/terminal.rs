@@ -324,6 +324,12 @@ pub fn readiness_table(plan: &Plan) -> String {
     reopenings(&mut out, plan);
     already_grouted(&mut out, plan);
     warnings(&mut out, plan);
+    if let Some(caution) = words::approximations_caution(&plan.approximations) {
+        out.push('\n');
+        for l in wrap(&caution, "! ", "  ", LINE_WIDTH) {
+            let _ = writeln!(out, "{l}");
+        }
+    }
     let _ = writeln!(out, "\n{}", Summary::of(plan).line(plan.as_of));
     out
 }

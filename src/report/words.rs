@@ -3,7 +3,7 @@
 //! so every output says the same thing the same way.
 
 use crate::planner::{Remedy, RemedyChoice, Rule, RuleCheck, Verdict, ZoneReadiness};
-use crate::scene::PlannerSettings;
+use crate::scene::{Approximation, PlannerSettings};
 use crate::vocab::ZonePoint;
 
 /// A symbol that reads without colour.
@@ -195,6 +195,21 @@ pub fn zone_words(z: &ZoneReadiness, s: &PlannerSettings) -> String {
             }
         }
     }
+}
+
+/// The caution a plan computed with opt-in approximations carries (None on
+/// the exact path): their keys, and that a zone near a limit is decided on
+/// an exact run (on the large arch the five together moved deciding
+/// apertures by up to 0.39 mm and changed remedies near 0.5 mm).
+pub fn approximations_caution(approximations: &[Approximation]) -> Option<String> {
+    (!approximations.is_empty()).then(|| {
+        format!(
+            "Computed with opt-in approximations of the mechanics ({}): the apertures differ from \
+             the exact path's (measure by how much with `groutready study compare`); decide a zone \
+             near a limit, and its remedy, on a run without them.",
+            crate::scene::approximation::describe(approximations)
+        )
+    })
 }
 
 #[cfg(test)]

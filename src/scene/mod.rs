@@ -34,6 +34,7 @@
 //! # Ok::<(), groutready::scene::SceneError>(())
 //! ```
 
+pub mod approximation;
 mod boundary;
 mod error;
 mod planner;
@@ -49,6 +50,7 @@ use crate::material::{AdiabaticRise, AutogenousLaw, CreepLaw, ModulusLaw, PipeLa
 use crate::mesh::geometry::Geometry;
 use crate::vocab::{Epoch, Invalid};
 
+pub use approximation::Approximation;
 pub use boundary::{Boundary, FarFace, Support};
 pub use error::SceneError;
 pub use planner::PlannerSettings;

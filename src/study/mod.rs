@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use crate::app::{self, AppError, RunSummary};
 use crate::mechanics::{MechError, MechStats};
-use crate::scene::{Effect, Scene, ThermalSolverKind};
+use crate::scene::{approximation, Effect, Scene, ThermalSolverKind};
 use crate::schedule::{self, SynthParams};
 use crate::sim::{JointRecords, SimError, Simulation};
 use crate::thermal::ThermalError;
@@ -34,6 +34,12 @@ pub fn summary_line(s: &RunSummary) -> String {
             m.steps, m.numeric, m.contact_iterations, m.block_pivoting_steps, s.aperture_rows
         );
         out += &m.kept_tension_warning();
+        if !s.approximations.is_empty() {
+            out += &format!(
+                "mechanics approximations: {}\n",
+                approximation::describe(&s.approximations)
+            );
+        }
     }
     out
 }
@@ -193,16 +199,8 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
             if resume.is_some() {
                 continue;
             }
-            let fast_path = scene.solver.contact_capacitance
-                || scene.solver.condense_rock
-                || scene.time.mechanics_max_step_days > 1;
-            if exact && scene.has(Effect::Joints) && fast_path {
-                let mut exact_scene = scene.clone();
-                exact_scene.solver.contact_capacitance = false;
-                exact_scene.solver.condense_rock = false;
-                exact_scene.time.mechanics_max_step_days = 1;
-                exact_scene.time.mechanics_merge_pours = false;
-                exact_scene.time.mechanics_merge_groutings = false;
+            let exact_scene = scene.exact_path();
+            if exact && scene.has(Effect::Joints) && exact_scene != scene {
                 let exact_run = Timed {
                     label: format!("{stem}/exact"),
                     scene: &exact_scene,
@@ -211,8 +209,12 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 .staged_run(&schedules, None, max_days, load_s)?;
                 let c = compare_at_grouting_dates(&fast, &exact_run, &schedules, scene.epoch);
                 println!(
-                    "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ",
-                    "", c.samples, 1e3 * c.max_aperture_diff_m, c.states_differ
+                    "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ (approximations: {})",
+                    "",
+                    c.samples,
+                    1e3 * c.max_aperture_diff_m,
+                    c.states_differ,
+                    approximation::describe(&scene.approximations())
                 );
             }
             timed.complete_dam(complete_mechanics)?;

@@ -132,6 +132,14 @@ fn run_writes_temperatures_apertures_and_snapshots() {
 
     grouting_distribution_reads_the_csv(&out, &rows);
     reopening_reads_the_csv(&out, &rows);
+    // The small dam's mechanics is exact: run.txt says so, the console
+    // names approximations only when there are some.
+    let text = std::fs::read_to_string(out.join("run.txt")).unwrap();
+    assert!(
+        text.contains("mechanics approximations: none (the exact path)\n"),
+        "{text}"
+    );
+    assert!(!String::from_utf8_lossy(&status.stdout).contains("approximations"));
 
     only(
         &out,

@@ -253,6 +253,7 @@ fn fixture() -> Plan {
             meter(3, 1, "upstream", "2024-08-10", 0.40, Some(0.30)),
         ],
         warnings: vec![],
+        approximations: vec![],
         stats: PlanStats {
             baseline_seconds: 120.5,
             restarted_from: Some(date("2024-08-15")),
@@ -1053,4 +1054,52 @@ fn a_zone_too_warm_alone_reads_as_a_temperature_failure() {
         row.contains("0.80 ≥ 0.50") && row.ends_with("temperature"),
         "{row}"
     );
+}
+
+/// A plan whose mechanics was computed with opt-in approximations says so in
+/// every report, with their keys; a plan on the exact path says nothing.
+#[test]
+fn a_plan_with_approximations_says_which_in_every_report() {
+    use groutready::scene::Approximation;
+    let mut plan = fixture();
+    plan.approximations = vec![
+        Approximation::LongerSteps { max_days: 3 },
+        Approximation::MergedPours,
+    ];
+    let keys = "time.mechanics_max_step_days = 3, time.mechanics_merge_pours = true";
+    let dir = tempfile::tempdir().unwrap();
+    let files = report::write_all(dir.path(), &plan).unwrap();
+    let md = read(&files.markdown);
+    let summary = section(&md, "Summary");
+    assert!(
+        summary.contains(&format!(
+            "> **Computed with opt-in approximations of the mechanics ({keys}):"
+        )),
+        "{summary}"
+    );
+    let t = report::readiness_table(&plan);
+    let flat = t.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains(&format!(
+            "! Computed with opt-in approximations of the mechanics ({keys}): the apertures differ"
+        )),
+        "{t}"
+    );
+    assert!(
+        t.lines()
+            .all(|l| l.chars().count() <= report::terminal::LINE_WIDTH),
+        "{t}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&read(&files.json)).unwrap();
+    assert_eq!(
+        v["approximations"],
+        serde_json::json!([{"longer_steps": {"max_days": 3}}, "merged_pours"])
+    );
+
+    let (_d, exact, plain) = written();
+    assert!(exact.approximations.is_empty());
+    assert!(!read(&plain.markdown).contains("approximations"));
+    assert!(!report::readiness_table(&exact).contains("approximations"));
+    let v: serde_json::Value = serde_json::from_str(&read(&plain.json)).unwrap();
+    assert_eq!(v["approximations"], serde_json::json!([]));
 }

@@ -529,3 +529,20 @@ fn a_second_what_if_on_the_kept_frame_gives_the_first_ones_answer() {
         format!("{:?}", second.history)
     );
 }
+
+/// A plan computed with opt-in approximations of the mechanics says so in
+/// the header (the reports name them); the small dam's exact plan does not.
+#[test]
+fn the_header_marks_a_plan_with_approximate_mechanics() {
+    let p = common::small_plan();
+    assert_eq!(p.output.status.code(), Some(0), "{}", p.stderr());
+    let mut data = RunData::load(&p.out).unwrap();
+    assert!(data.run.plan.approximations.is_empty());
+    data.run.plan.approximations = vec![groutready::scene::Approximation::MergedPours];
+    let s = Session::open(data, true);
+    let text = screen(&s.app, 120, 24);
+    let header = text.lines().next().unwrap();
+    assert!(header.ends_with(" · ! approximate mechanics"), "{text}");
+    let exact = session(None, true);
+    assert!(!screen(&exact.app, 120, 24).contains("approximate"));
+}

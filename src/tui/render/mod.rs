@@ -54,6 +54,13 @@ impl Widget for &App {
             } else {
                 String::new()
             }),
+            // the reports say which approximations; the header that there
+            // are some, since they decide zones near a limit
+            if data.run.plan.approximations.is_empty() {
+                Span::raw("")
+            } else {
+                Span::styled(" · ! approximate mechanics", theme.error())
+            },
         ]))
         .render(header, buf);
         render_tabs(self, &theme, s.flagged, tabs, buf);
