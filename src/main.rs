@@ -38,6 +38,12 @@ enum Command {
         /// restart point (`.NAME.resume`, which is then removed).
         #[arg(long)]
         from_scratch: bool,
+        /// Simulate on the exact path: the scene's opt-in approximations
+        /// (`time.mechanics_max_step_days` above 1, merged pours or
+        /// groutings, layer merging, a coarsened rock) off, whatever the
+        /// scene file says.
+        #[arg(long)]
+        exact: bool,
     },
     /// Readiness of every grouting zone on its planned date, remedies for the
     /// zones that are not groutable, and a report (the weekly job).
@@ -109,6 +115,12 @@ struct PlanArgs {
     /// the TUI, plan again even when its plan is up to date).
     #[arg(long)]
     from_scratch: bool,
+    /// Simulate on the exact path: the scene's opt-in approximations
+    /// (`time.mechanics_max_step_days` above 1, merged pours or
+    /// groutings, layer merging, a coarsened rock) off, whatever the
+    /// scene file says.
+    #[arg(long)]
+    exact: bool,
 }
 
 impl PlanArgs {
@@ -307,7 +319,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<u8> {
             out,
             force,
             from_scratch,
-        } => run(scene, schedules, out, force, from_scratch),
+            exact,
+        } => run(scene, schedules, out, force, from_scratch, exact),
         Command::Plan {
             scene,
             args,
@@ -385,10 +398,11 @@ fn run(
     out: Option<PathBuf>,
     force: bool,
     from_scratch: bool,
+    exact: bool,
 ) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = out.unwrap_or_else(|| default_out(&scene));
-    let inputs = app::load_inputs(&scene, schedules.as_deref())?;
+    let inputs = load_inputs(&scene, schedules.as_deref(), exact)?;
     let out = prepare_out(&out, &inputs, force)?;
     eprintln!(
         "{}: {} elements, {} thermal dofs, {} pours, effects {:?}",
@@ -421,8 +435,21 @@ fn run(
     Ok(0)
 }
 
-/// `groutready plan`: plan the zones, print the readiness table and what the
-/// run cost; exit [`EXIT_FLAGGED`] on request when a zone is not groutable.
+/// Scene, schedules and mesh; with `exact` (`--exact`) the scene's opt-in
+/// approximations are turned off, and the console says which were.
+fn load_inputs(scene: &Path, schedules: Option<&Path>, exact: bool) -> anyhow::Result<app::Inputs> {
+    let mut inputs = app::load_inputs(scene, schedules)?;
+    let approximations = inputs.scene.approximations();
+    if exact && !approximations.is_empty() {
+        eprintln!(
+            "note: --exact: simulating without the scene's {}",
+            groutready::scene::approximation::describe(&approximations)
+        );
+        inputs.scene = inputs.scene.without_approximations();
+    }
+    Ok(inputs)
+}
+
 /// Warnings on the inputs, before the long run (the report repeats them).
 fn print_warnings(warnings: &[groutready::schedule::Warning]) {
     for w in warnings {
@@ -430,10 +457,12 @@ fn print_warnings(warnings: &[groutready::schedule::Warning]) {
     }
 }
 
+/// `groutready plan`: plan the zones, print the readiness table and what the
+/// run cost; exit [`EXIT_FLAGGED`] on request when a zone is not groutable.
 fn plan(scene: Option<PathBuf>, args: &PlanArgs, fail_on_flag: bool) -> anyhow::Result<u8> {
     let scene = scene.unwrap_or_else(|| bundled("models/demo_arch.toml"));
     let out = args.out.clone().unwrap_or_else(|| default_out(&scene));
-    let inputs = app::load_inputs(&scene, args.schedules.as_deref())?;
+    let inputs = load_inputs(&scene, args.schedules.as_deref(), args.exact)?;
     let out = prepare_out(&out, &inputs, args.force)?;
     eprintln!(
         "{}: {} elements, {} pours, {} grouting zones, effects {:?}",
@@ -608,6 +637,7 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
             ("--horizon-days", args.horizon_days.is_some()),
             ("--from-scratch", args.from_scratch),
             ("--force", args.force),
+            ("--exact", args.exact),
         ];
         if let Some((flag, _)) = scene_only.iter().find(|f| f.1) {
             anyhow::bail!(
@@ -621,7 +651,7 @@ fn tui(target: Option<PathBuf>, args: PlanArgs) -> anyhow::Result<u8> {
     } else {
         let out = args.out.clone().unwrap_or_else(|| default_out(&target));
         // Bad input is reported here, before the terminal is taken over.
-        let inputs = app::load_inputs(&target, args.schedules.as_deref())?;
+        let inputs = load_inputs(&target, args.schedules.as_deref(), args.exact)?;
         let request = args.request();
         if app::plan::is_current(&inputs, &out, &request) {
             let data = RunData::load(&out).with_context(|| format!("opening {}", out.display()))?;

@@ -206,7 +206,7 @@ pub fn approximations_caution(approximations: &[Approximation]) -> Option<String
         format!(
             "Computed with opt-in approximations of the mechanics ({}): the apertures differ from \
              the exact path's (measure by how much with `groutready study compare`); decide a zone \
-             near a limit, and its remedy, on a run without them.",
+             near a limit, and its remedy, on a run without them (`--exact`).",
             crate::scene::approximation::describe(approximations)
         )
     })

@@ -688,3 +688,72 @@ fn a_killed_run_continues_from_its_restart_point() {
     // nothing left beside the two run folders: no restart point, lock or staging
     only(&runs, &["resumed", "scratch"]);
 }
+
+/// A scene with opt-in approximations: `run` lists them on the console and
+/// in run.txt; `--exact` turns them off, says which, and takes the exact
+/// path's daily mechanical steps.
+#[test]
+fn run_lists_the_approximations_and_exact_turns_them_off() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = small_dam_scene_text(&repo("schedules/small_dam")).replace(
+        "[time]\n",
+        "[time]\nmechanics_max_step_days = 3\nmechanics_merge_pours = true\n",
+    );
+    let scene = tmp.path().join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let keys = "time.mechanics_max_step_days = 3, time.mechanics_merge_pours = true";
+    let run = |exact: bool, out: &str| {
+        let o = bin()
+            .arg("run")
+            .arg(&scene)
+            .arg("--out")
+            .arg(tmp.path().join(out))
+            .args(exact.then_some("--exact"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let run_txt = std::fs::read_to_string(tmp.path().join(out).join("run.txt")).unwrap();
+        (o, run_txt)
+    };
+    let steps = |run_txt: &str| -> u32 {
+        let line = run_txt
+            .lines()
+            .find(|l| l.starts_with("mechanics: "))
+            .unwrap();
+        line["mechanics: ".len()..]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+
+    let (approx, approx_txt) = run(false, "approx");
+    let listed = format!("mechanics approximations: {keys}\n");
+    assert!(
+        String::from_utf8_lossy(&approx.stdout).contains(&listed),
+        "{}",
+        String::from_utf8_lossy(&approx.stdout)
+    );
+    assert!(approx_txt.contains(&listed), "{approx_txt}");
+
+    let (exact, exact_txt) = run(true, "exact");
+    let stderr = String::from_utf8_lossy(&exact.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "note: --exact: simulating without the scene's {keys}\n"
+        )),
+        "{stderr}"
+    );
+    assert!(
+        exact_txt.contains("mechanics approximations: none (the exact path)\n"),
+        "{exact_txt}"
+    );
+    assert!(!String::from_utf8_lossy(&exact.stdout).contains("approximations"));
+    // the exact path steps every midnight: more steps than the 3-day steps
+    // with pours merged (264 against 130 steps)
+    assert!(
+        steps(&exact_txt) > steps(&approx_txt),
+        "{exact_txt}\n{approx_txt}"
+    );
+}
