@@ -352,6 +352,10 @@ fn grouting_distribution(
     ))
 }
 
+/// How `run.txt` (and the console) starts the line of the mechanics'
+/// approximations (`study compare` reads it back).
+pub const APPROXIMATIONS_LINE: &str = "mechanics approximations: ";
+
 pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
     let mut s = format!(
         "scene: {} ({})\nepoch: {}\neffects: {:?}\nelements: {}\nthermal dofs: {}\nsteps: {}\npours: {}\nwall seconds: {:.2}\n",
@@ -378,7 +382,7 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
         );
         s += &m.kept_tension_warning();
         s += &format!(
-            "mechanics approximations: {}\n",
+            "{APPROXIMATIONS_LINE}{}\n",
             crate::scene::approximation::describe(&inputs.scene.approximations())
         );
     }

@@ -20,6 +20,10 @@
 //!   [`NOTABLE_DIFF_MM`];
 //! - rows in one file only (a run that ended earlier, other snapshot dates).
 //!
+//! A run folder's approximations of the mechanics, as its `run.txt` lists
+//! them, are named beside its file, so the report says which run is the
+//! exact one.
+//!
 //! Rows are keyed by (zone, point, day). Each row's `date` must be its `day`
 //! counted from the scene's epoch, so a run compared against the wrong
 //! scene is refused rather than compared on shifted dates. Differences are
@@ -153,6 +157,9 @@ pub struct Comparison {
     pub shared: Shared,
     /// rows only in A, only in B
     pub only_in: [usize; 2],
+    /// the mechanics' approximations of A and B as their `run.txt` lists
+    /// them (None: a file, or a folder without that line)
+    pub approximations: [Option<String>; 2],
 }
 
 /// Compares the `apertures.csv` of runs `run_a` and `run_b` (run folders or
@@ -162,7 +169,17 @@ pub fn compare(run_a: &Path, run_b: &Path, scene: &Path) -> Result<Comparison, S
     let (s, grouting) = grouting_schedule(scene)?;
     let a = Apertures::read(&apertures_csv(run_a)?, s.epoch)?;
     let b = Apertures::read(&apertures_csv(run_b)?, s.epoch)?;
-    Ok(Comparison::of(&a, &b, &grouting, &s.planner, s.epoch))
+    let mut c = Comparison::of(&a, &b, &grouting, &s.planner, s.epoch);
+    c.approximations = [run_a, run_b].map(approximations_of_run);
+    Ok(c)
+}
+
+/// The approximations a run folder's `run.txt` lists, as written there.
+fn approximations_of_run(run: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(run.join("run.txt")).ok()?;
+    text.lines()
+        .find_map(|l| l.strip_prefix(crate::app::APPROXIMATIONS_LINE))
+        .map(str::to_string)
 }
 
 /// The scene and the rows of its `grouting.csv` (read with the rest of its
@@ -406,6 +423,7 @@ impl Comparison {
             planned: at_planned_dates(a, b, grouting, settings, epoch),
             shared: shared(a, b, epoch),
             only_in: [only(a, b), only(b, a)],
+            approximations: [None, None],
         }
     }
 
@@ -413,7 +431,16 @@ impl Comparison {
     pub fn report(&self) -> String {
         let p = &self.planned;
         let [a, b] = &self.files;
-        let mut out = format!("A: {a}\nB: {b}\n");
+        let mut out = String::new();
+        for (name, file, approximations) in [
+            ("A", a, &self.approximations[0]),
+            ("B", b, &self.approximations[1]),
+        ] {
+            match approximations {
+                Some(x) => out += &format!("{name}: {file} (mechanics approximations: {x})\n"),
+                None => out += &format!("{name}: {file}\n"),
+            }
+        }
         out += &format!(
             "at the planned grouting dates ({} zones in grouting.csv, point {}): {} compared, {} missing from A, {} missing from B\n",
             p.planned, self.point, p.compared, p.missing[0], p.missing[1]

@@ -36,7 +36,8 @@ pub fn summary_line(s: &RunSummary) -> String {
         out += &m.kept_tension_warning();
         if !s.approximations.is_empty() {
             out += &format!(
-                "mechanics approximations: {}\n",
+                "{}{}\n",
+                app::APPROXIMATIONS_LINE,
                 approximation::describe(&s.approximations)
             );
         }

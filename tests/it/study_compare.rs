@@ -41,8 +41,14 @@ fn write(dir: &Path, name: &str, rows: &str) -> std::path::PathBuf {
 #[test]
 fn compare_reports_the_planned_dates_and_the_shared_rows() {
     let tmp = tempfile::tempdir().unwrap();
-    // A as a run folder, B as the file itself; the demo scene by default
-    write(tmp.path(), "a/apertures.csv", A);
+    // A as a run folder (its run.txt naming its approximations), B as the
+    // file itself; the demo scene by default
+    let a = write(tmp.path(), "a/apertures.csv", A);
+    std::fs::write(
+        tmp.path().join("a/run.txt"),
+        "steps: 3\nmechanics approximations: time.mechanics_max_step_days = 3\n",
+    )
+    .unwrap();
     let b = write(tmp.path(), "b.csv", B);
     let o = bin()
         .args(["study", "compare"])
@@ -57,6 +63,15 @@ fn compare_reports_the_planned_dates_and_the_shared_rows() {
         String::from_utf8_lossy(&o.stderr)
     );
     let rms = ((0.06f64.powi(2) + 0.171f64.powi(2)) / 3.0).sqrt();
+    let files = format!(
+        "A: {} (mechanics approximations: time.mechanics_max_step_days = 3)\nB: {}\n",
+        a.display(),
+        b.display()
+    );
+    assert!(
+        stdout.starts_with(&files),
+        "{files}not at the start of\n{stdout}"
+    );
     for line in [
         "(133 zones in grouting.csv, point min): 3 compared, 130 missing from A, 130 missing from B",
         "largest difference 0.1710 mm at joint 11 zone 14 on 2025-09-15 (A 1.5647 mm, B 1.7357 mm)",
