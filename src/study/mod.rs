@@ -209,13 +209,15 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
                 }
                 .staged_run(&schedules, None, max_days, load_s)?;
                 let c = compare_at_grouting_dates(&fast, &exact_run, &schedules, scene.epoch);
+                let approximations = scene.approximations();
+                let with = if approximations.is_empty() {
+                    "no approximation: the exact accelerations alone".to_string()
+                } else {
+                    format!("with {}", approximation::describe(&approximations))
+                };
                 println!(
-                    "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ (approximations: {})",
-                    "",
-                    c.samples,
-                    1e3 * c.max_aperture_diff_m,
-                    c.states_differ,
-                    approximation::describe(&scene.approximations())
+                    "{:<22} fast against exact path: {} zone samples at their grouting dates, apertures differ by at most {:.2e} mm, {} contact states differ ({with})",
+                    "", c.samples, 1e3 * c.max_aperture_diff_m, c.states_differ,
                 );
             }
             timed.complete_dam(complete_mechanics)?;
