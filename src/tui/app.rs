@@ -31,6 +31,8 @@ pub struct Planning {
     /// remedy re-simulations started so far
     pub resimulations: Vec<String>,
     pub error: Option<String>,
+    /// the scene's opt-in approximations of the mechanics (empty: exact)
+    pub approximations: Vec<crate::scene::Approximation>,
 }
 
 /// Which what-if field the arrows change.

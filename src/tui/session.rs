@@ -52,7 +52,10 @@ impl Session {
     /// then opens it; the folder stays locked until the plan is written.
     pub fn plan(inputs: Inputs, out: OutDir, request: PlanRequest, color: bool) -> Session {
         let (tx, rx) = channel();
-        let app = App::planning(&inputs.scene.name, color);
+        let mut app = App::planning(&inputs.scene.name, color);
+        if let Some(p) = app.planning.as_mut() {
+            p.approximations = inputs.scene.approximations();
+        }
         let t = tx.clone();
         std::thread::spawn(move || {
             let send = |e: JobEvent| {

@@ -156,6 +156,21 @@ fn planning_screen_shows_progress_and_failure() {
     );
     app.update(Event::char('q'));
     assert!(app.quit);
+
+    // A scene with opt-in approximations says which while it is planned.
+    let mut app = App::planning("Small dam with joints", true);
+    app.planning.as_mut().unwrap().approximations =
+        vec![groutready::scene::Approximation::LongerSteps { max_days: 3 }];
+    let text = screen(&app, 80, 24);
+    assert!(
+        text.contains("With opt-in approximations of the mechanics:")
+            && text.contains("time.mechanics_max_step_days = 3"),
+        "{text}"
+    );
+    assert!(
+        text.contains("baseline") || text.contains("reading the inputs"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -7,6 +7,7 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Gauge, Paragraph, Widget, Wrap};
 
 use super::Theme;
+use crate::scene::approximation;
 use crate::tui::app::App;
 
 pub fn render(app: &App, theme: &Theme, area: Rect, buf: &mut Buffer) {
@@ -19,8 +20,15 @@ pub fn render(app: &App, theme: &Theme, area: Rect, buf: &mut Buffer) {
     ));
     let inner = block.inner(area);
     block.render(area, buf);
+    // the approximations, when there are some, on lines of their own
+    let caution = (!p.approximations.is_empty()).then(|| {
+        format!(
+            "With opt-in approximations of the mechanics: {}",
+            approximation::describe(&p.approximations)
+        )
+    });
     let [head, gauge, list, keys] = Layout::vertical([
-        Constraint::Length(2),
+        Constraint::Length(if caution.is_some() { 4 } else { 2 }),
         Constraint::Length(1),
         Constraint::Min(0),
         Constraint::Length(1),
@@ -36,12 +44,16 @@ pub fn render(app: &App, theme: &Theme, area: Rect, buf: &mut Buffer) {
         Paragraph::new(Span::styled(" q quit", theme.key())).render(keys, buf);
         return;
     }
-    Paragraph::new(
+    let mut lines = vec![Line::from(
         "Simulating the construction to the last zone due, then re-simulating \
          the remedies of the zones that are not groutable.",
-    )
-    .wrap(Wrap { trim: true })
-    .render(head, buf);
+    )];
+    if let Some(c) = caution {
+        lines.push(Line::from(Span::styled(c, theme.error())));
+    }
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: true })
+        .render(head, buf);
     let (ratio, label) = match p.baseline {
         Some((day, end)) if end > 0.0 => (
             (day / end).clamp(0.0, 1.0),
