@@ -2,7 +2,9 @@
 //!
 //! A ladder of settings of one scene (discretisation and solver knobs, each
 //! varied alone from the scene as given, the presets, and a reference: the
-//! finest affordable run) is simulated to the last zone's planned date.
+//! finest affordable run, without the scene's opt-in approximations of the
+//! mechanics, so a scene that has some is measured with their error) is
+//! simulated to the last zone's planned date.
 //! Every zone is judged on its planned date by the planner's own rules
 //! ([`Rules::evaluate`]), and each setting is compared with the reference
 //! at the zone points (upstream, centre, downstream, minimum), which every
@@ -86,7 +88,8 @@ impl Setting {
 }
 
 /// The reference: the finest setting, with its level of each refined knob
-/// (knobs not named are at the scene's level, h = 1).
+/// (knobs not named are at the scene's level, h = 1), on the exact path's
+/// mechanics ([`Scene::without_approximations`]).
 pub struct Reference {
     pub setting: Setting,
     pub levels: Vec<(String, f64)>,
@@ -850,6 +853,7 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
     }
     let reference = Reference {
         setting: Setting::new("reference", REFERENCE, None, |s| {
+            *s = s.without_approximations();
             refine_mesh(s, 2.0, 2.0, 1);
             scale_steps(s, 0.25);
             s.time.capacity = CapacityKind::Consistent;
@@ -1115,6 +1119,7 @@ pub fn accuracy(
 pub fn time_reference() -> Reference {
     Reference {
         setting: Setting::new("reference (time only)", REFERENCE, None, |s| {
+            *s = s.without_approximations();
             scale_steps(s, 0.25);
             s.time.capacity = CapacityKind::Consistent;
         }),
@@ -1125,6 +1130,30 @@ pub fn time_reference() -> Reference {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A reference computed with the scene's approximations would hide
+    /// their error: both references clear them, and nothing else of what
+    /// they do changes.
+    #[test]
+    fn the_references_have_no_approximation() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut scene = Scene::load(&root.join("models/small_dam_joints.toml")).unwrap();
+        scene.time.mechanics_max_step_days = 3;
+        scene.time.mechanics_merge_pours = true;
+        scene.solver.layer_merging_age_days = 60;
+        for reference in [default_ladder(&scene).1, time_reference()] {
+            let mut with = scene.clone();
+            (reference.setting.edit)(&mut with);
+            assert!(
+                with.approximations().is_empty(),
+                "{:?}",
+                with.approximations()
+            );
+            let mut without = scene.without_approximations();
+            (reference.setting.edit)(&mut without);
+            assert_eq!(with, without);
+        }
+    }
 
     #[test]
     fn rate_of_a_second_order_sequence_is_two() {
