@@ -356,6 +356,15 @@ fn grouting_distribution(
 /// approximations (`study compare` reads it back).
 pub const APPROXIMATIONS_LINE: &str = "mechanics approximations: ";
 
+/// The line of `run.txt` (and the console) naming the mechanics'
+/// approximations, "none (the exact path)" when there are none.
+pub fn approximations_line(approximations: &[crate::scene::Approximation]) -> String {
+    format!(
+        "{APPROXIMATIONS_LINE}{}\n",
+        crate::scene::approximation::describe(approximations)
+    )
+}
+
 pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
     let mut s = format!(
         "scene: {} ({})\nepoch: {}\neffects: {:?}\nelements: {}\nthermal dofs: {}\nsteps: {}\npours: {}\nwall seconds: {:.2}\n",
@@ -381,10 +390,7 @@ pub(crate) fn run_text(inputs: &Inputs, stats: &RunStats) -> String {
             m.steps, m.symbolic, m.numeric, m.contact_iterations, m.block_pivoting_steps, m.max_dofs, m.max_free_dofs
         );
         s += &m.kept_tension_warning();
-        s += &format!(
-            "{APPROXIMATIONS_LINE}{}\n",
-            crate::scene::approximation::describe(&inputs.scene.approximations())
-        );
+        s += &approximations_line(&inputs.scene.approximations());
     }
     for w in inputs.warnings.iter().chain(&stats.warnings) {
         s += &format!("warning: {w}\n");

@@ -35,11 +35,7 @@ pub fn summary_line(s: &RunSummary) -> String {
         );
         out += &m.kept_tension_warning();
         if !s.approximations.is_empty() {
-            out += &format!(
-                "{}{}\n",
-                app::APPROXIMATIONS_LINE,
-                approximation::describe(&s.approximations)
-            );
+            out += &app::approximations_line(&s.approximations);
         }
     }
     out
@@ -200,8 +196,10 @@ pub fn perf(scenes: &[PathBuf], options: &PerfOptions) -> Result<(), StudyError>
             if resume.is_some() {
                 continue;
             }
-            let exact_scene = scene.exact_path();
-            if exact && scene.has(Effect::Joints) && exact_scene != scene {
+            let exact_scene = (exact && scene.has(Effect::Joints))
+                .then(|| scene.exact_path())
+                .filter(|e| *e != scene);
+            if let Some(exact_scene) = exact_scene {
                 let exact_run = Timed {
                     label: format!("{stem}/exact"),
                     scene: &exact_scene,
