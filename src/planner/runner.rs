@@ -7,7 +7,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::mechanics::Frame;
 use crate::mesh::Mesh;
-use crate::scene::Scene;
+use crate::scene::{Approximation, Scene};
 use crate::schedule::Schedules;
 use crate::sim::{Checkpoint, History, RunStats, SimError, Simulation, StopWhen};
 use crate::vocab::Day;
@@ -184,8 +184,12 @@ impl<'a> Runner<'a> {
         }
         self.search_scene.get_or_init(|| {
             let mut s = self.scene.clone();
-            s.time.mechanics_max_step_days = days;
-            s.time.mechanics_merge_pours = true;
+            for a in [
+                Approximation::LongerSteps { max_days: days },
+                Approximation::MergedPours,
+            ] {
+                a.turn_on(&mut s);
+            }
             s
         })
     }

@@ -46,6 +46,20 @@ impl Approximation {
             Approximation::RockCoarsening { .. } => "solver.rock_coarsening",
         }
     }
+
+    /// Turns it on in `scene`: the one place a study writes the setting,
+    /// the inverse of [`Scene::approximations`]. Merged pours and groutings
+    /// need longer steps to merge into; they do not turn them on.
+    pub fn turn_on(self, scene: &mut Scene) {
+        let (t, s) = (&mut scene.time, &mut scene.solver);
+        match self {
+            Approximation::LongerSteps { max_days } => t.mechanics_max_step_days = max_days,
+            Approximation::MergedPours => t.mechanics_merge_pours = true,
+            Approximation::MergedGroutings => t.mechanics_merge_groutings = true,
+            Approximation::LayerMerging { age_days } => s.layer_merging_age_days = age_days,
+            Approximation::RockCoarsening { every } => s.rock_coarsening = every,
+        }
+    }
 }
 
 /// `key = value`, as written in the scene.
@@ -163,6 +177,23 @@ mod tests {
         // nothing else changed: the scene's own defaults come back
         assert_eq!(exact, scene());
         assert_eq!(describe(&[]), "none (the exact path)");
+    }
+
+    /// Each approximation turned on alone is listed alone, with its value.
+    #[test]
+    fn turning_one_on_lists_it() {
+        for a in [
+            Approximation::LongerSteps { max_days: 3 },
+            Approximation::MergedPours,
+            Approximation::MergedGroutings,
+            Approximation::LayerMerging { age_days: 60 },
+            Approximation::RockCoarsening { every: 4 },
+        ] {
+            let mut s = scene();
+            a.turn_on(&mut s);
+            assert_eq!(s.approximations(), [a]);
+            assert_eq!(s.without_approximations(), scene());
+        }
     }
 
     #[test]

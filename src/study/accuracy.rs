@@ -42,7 +42,7 @@ use crate::mesh::geometry::Geometry;
 use crate::planner::rules::{HistoryIndex, Rules};
 use crate::planner::search::grout_days;
 use crate::planner::{Apertures, Verdict};
-use crate::scene::{CapacityKind, Preset, Scene, ScheduledStep, ThermalSolverKind};
+use crate::scene::{Approximation, CapacityKind, Preset, Scene, ScheduledStep, ThermalSolverKind};
 use crate::schedule::Schedules;
 use crate::sim::{dam_layout, Simulation};
 use crate::vocab::{fnv1a, Day, ZoneId};
@@ -740,6 +740,16 @@ fn scale_steps(scene: &mut Scene, k: f64) {
     scene.time.max_step_days *= k;
 }
 
+/// A row that turns the opt-in approximations `on` on.
+fn approximate(name: &str, knob: &'static str, on: &[Approximation]) -> Setting {
+    let on = on.to_vec();
+    Setting::new(name, knob, None, move |s| {
+        for a in &on {
+            a.turn_on(s)
+        }
+    })
+}
+
 /// The default ladder of `scene`: the scene as given; the thermal steps
 /// ×2, ×½, ×¼; the multi-rate schedule; the other capacity form;
 /// Crank–Nicolson; PCG at 1e-10; mechanical steps up to 3 days; the other
@@ -777,28 +787,26 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         s.solver.pcg_tolerance = 1e-10;
     }));
     if scene.any_mechanical() {
-        l.push(Setting::new("mechanics 3 d", "mechanics step", None, |s| {
-            s.time.mechanics_max_step_days = 3
-        }));
-        l.push(Setting::new(
-            "mechanics 3 d, pours merged",
-            "pours merged",
-            None,
-            |s| {
-                s.time.mechanics_max_step_days = 3;
-                s.time.mechanics_merge_pours = true;
-            },
-        ));
-        l.push(Setting::new(
-            "mechanics 3 d, pours and groutings merged",
-            "groutings merged",
-            None,
-            |s| {
-                s.time.mechanics_max_step_days = 3;
-                s.time.mechanics_merge_pours = true;
-                s.time.mechanics_merge_groutings = true;
-            },
-        ));
+        const LONGER: Approximation = Approximation::LongerSteps { max_days: 3 };
+        for (name, knob, on) in [
+            ("mechanics 3 d", "mechanics step", &[LONGER][..]),
+            (
+                "mechanics 3 d, pours merged",
+                "pours merged",
+                &[LONGER, Approximation::MergedPours],
+            ),
+            (
+                "mechanics 3 d, pours and groutings merged",
+                "groutings merged",
+                &[
+                    LONGER,
+                    Approximation::MergedPours,
+                    Approximation::MergedGroutings,
+                ],
+            ),
+        ] {
+            l.push(approximate(name, knob, on));
+        }
         let element = scene.solver.element.other();
         let name = format!("element {}", element.name());
         l.push(other_form(name, "element", element, |s, e| {
@@ -807,19 +815,17 @@ pub fn default_ladder(scene: &Scene) -> (Vec<Setting>, Reference) {
         // the blocks generator founds every block on one level: no rock
         // beside the dam to tie
         if !matches!(scene.geometry, Geometry::Blocks(_)) && scene.solver.rock_coarsening == 1 {
-            l.push(Setting::new(
+            l.push(approximate(
                 "rock ties 1 in 4",
                 "rock coarsening",
-                None,
-                |s| s.solver.rock_coarsening = 4,
+                &[Approximation::RockCoarsening { every: 4 }],
             ));
         }
         if scene.solver.layer_merging_age_days == 0 {
-            l.push(Setting::new(
+            l.push(approximate(
                 "layer merging 60 d",
                 "layer merging",
-                None,
-                |s| s.solver.layer_merging_age_days = 60,
+                &[Approximation::LayerMerging { age_days: 60 }],
             ));
         }
     }
@@ -1138,9 +1144,13 @@ mod tests {
     fn the_references_have_no_approximation() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let mut scene = Scene::load(&root.join("models/small_dam_joints.toml")).unwrap();
-        scene.time.mechanics_max_step_days = 3;
-        scene.time.mechanics_merge_pours = true;
-        scene.solver.layer_merging_age_days = 60;
+        for a in [
+            Approximation::LongerSteps { max_days: 3 },
+            Approximation::MergedPours,
+            Approximation::LayerMerging { age_days: 60 },
+        ] {
+            a.turn_on(&mut scene);
+        }
         for reference in [default_ladder(&scene).1, time_reference()] {
             let mut with = scene.clone();
             (reference.setting.edit)(&mut with);
