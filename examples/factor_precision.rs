@@ -22,18 +22,11 @@ use groutready::mesh::Part;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod common;
+
 fn main() -> anyhow::Result<()> {
-    let path = std::env::args()
-        .nth(1)
-        .unwrap_or("models/demo_arch.toml".into());
-    let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
+    let (path, inputs, rock_e) = common::scene_from_args()?;
     let mesh = &inputs.mesh;
-    let rock_e = inputs
-        .scene
-        .rock
-        .as_ref()
-        .and_then(|r| r.modulus_pa)
-        .unwrap_or(2e10);
     let n = 3 * mesh.nodes.len();
     let local: Vec<[u32; 24]> = mesh.elements.iter().map(elasticity::element_dofs).collect();
     let pattern = Arc::new(Pattern::new(n, &local));

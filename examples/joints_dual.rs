@@ -27,26 +27,19 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod common;
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn main() -> anyhow::Result<()> {
-    let path = std::env::args()
-        .nth(1)
-        .unwrap_or("models/demo_arch.toml".into());
+    let (path, inputs, rock_e) = common::scene_from_args()?;
+    let mesh = &inputs.mesh;
     let max_iterations: usize = match std::env::args().nth(2) {
         Some(a) => a.parse()?,
         None => 3000,
     };
-    let inputs = groutready::app::load_inputs(std::path::Path::new(&path), None)?;
-    let mesh = &inputs.mesh;
-    let rock_e = inputs
-        .scene
-        .rock
-        .as_ref()
-        .and_then(|r| r.modulus_pa)
-        .unwrap_or(2e10);
     let n = 3 * mesh.nodes.len();
     // node pairs (a, b), a != b
     let mut pairs = BTreeSet::new();
