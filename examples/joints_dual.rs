@@ -26,13 +26,11 @@
 //! lumped (0.13 s each), 213 deflated by each joint's 504 fields (F W 21 s,
 //! the iterations 45 s) and 52 by each zone's 7,587 (F W 354 s, 27 s),
 //! where the tied factorisation takes 4.3–6.6 s and a solve 0.2 s.
-use faer::{Mat, Par};
-use groutready::fem::ordering::Ordering;
-use groutready::fem::{elasticity, CholeskySolver, Pattern, SparseSym};
+use faer::Mat;
+use groutready::fem::CholeskySolver;
 use groutready::mesh::{Mesh, Part};
 use nalgebra::{DMatrix, DVector};
-use std::collections::{BTreeMap, BTreeSet};
-use std::sync::Arc;
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 mod common;
@@ -50,18 +48,8 @@ struct Pairs {
 
 impl Pairs {
     fn new(mesh: &Mesh) -> Pairs {
-        let mut seen = BTreeSet::new();
-        let mut pairs = Vec::new();
-        for fp in &mesh.face_pairs {
-            for k in 0..4 {
-                let (a, b) = (fp.nodes_a[k], fp.nodes_b[k]);
-                if a != b && seen.insert((a, b)) {
-                    pairs.push((a, b, fp.joint, fp.zone));
-                }
-            }
-        }
         Pairs {
-            pairs,
+            pairs: common::joint_node_pairs(mesh),
             n: 3 * mesh.nodes.len(),
         }
     }
@@ -285,58 +273,6 @@ fn cg(
     (lam, it, hist)
 }
 
-/// The complete mesh's stiffness with node `map(v)` for node v (mature
-/// concrete, the scene's rock), its base fixed.
-fn stiffness(
-    mesh: &Mesh,
-    rock_e: f64,
-    map: &dyn Fn(u32) -> u32,
-    fixed: &[bool],
-) -> anyhow::Result<(Arc<Pattern>, SparseSym)> {
-    let local: Vec<[u32; 24]> = mesh
-        .elements
-        .iter()
-        .map(|el| {
-            let mut d = [0u32; 24];
-            for (i, &nd) in el.iter().enumerate() {
-                for c in 0..3 {
-                    d[3 * i + c] = 3 * map(nd) + c as u32;
-                }
-            }
-            d
-        })
-        .collect();
-    let pattern = Arc::new(Pattern::new(3 * mesh.nodes.len(), &local));
-    let mut a = SparseSym::new(pattern.clone());
-    for e in 0..mesh.elements.len() {
-        let modulus = if mesh.parts[e] == Part::Rock {
-            rock_e
-        } else {
-            2.5e10
-        };
-        let g = elasticity::gauss_points(&mesh.element_coords(e))?;
-        a.add_element(
-            e,
-            &elasticity::stiffness(&g, &elasticity::isotropic_d(modulus, 0.2)),
-        );
-    }
-    a.apply_dirichlet(fixed);
-    Ok((pattern, a))
-}
-
-fn factorised(pattern: Arc<Pattern>, a: &SparseSym, what: &str) -> anyhow::Result<CholeskySolver> {
-    let mut s = CholeskySolver::with_options(pattern, &Ordering::Metis, Par::rayon(0))?;
-    let t = Instant::now();
-    s.factorize(a)?;
-    println!(
-        "{what} factor: L {:.1}M entries, {:.1} Gflop, {:.2} s",
-        s.factor_nnz() as f64 / 1e6,
-        s.factor_flops() / 1e9,
-        t.elapsed().as_secs_f64()
-    );
-    Ok(s)
-}
-
 /// The tied problem solved directly: the displacements, b's equal to a's.
 fn tied_solution(
     mesh: &Mesh,
@@ -356,8 +292,15 @@ fn tied_solution(
             ft[3 * b as usize + c] = 0.0;
         }
     }
-    let (tp, k_tied) = stiffness(mesh, rock_e, &|v| to[v as usize], &fixed_t)?;
-    let tied = factorised(tp, &k_tied, "tied (every pair bonded)")?;
+    let modulus = |e: usize| {
+        if mesh.parts[e] == Part::Rock {
+            rock_e
+        } else {
+            2.5e10
+        }
+    };
+    let (tp, k_tied) = common::stiffness(mesh, &modulus, &|v| to[v as usize], &fixed_t)?;
+    let tied = common::factorised(tp, &k_tied, "tied (every pair bonded)")?;
     let t = Instant::now();
     tied.solve_in_place(&mut ft)?;
     println!("tied solve {:.3} s", t.elapsed().as_secs_f64());
@@ -383,13 +326,19 @@ fn main() -> anyhow::Result<()> {
         pairs.pairs.len(),
         pairs.m()
     );
-    let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
-    let fixed: Vec<bool> = (0..n).map(|i| mesh.nodes[i / 3][2] < zmin + 1e-6).collect();
+    let fixed = common::base_fixed(mesh);
     let f: Vec<f64> = (0..n)
         .map(|i| if i % 3 == 2 && !fixed[i] { -1e5 } else { 0.0 })
         .collect();
-    let (pattern, k_open) = stiffness(mesh, rock_e, &|v| v, &fixed)?;
-    let open = factorised(pattern, &k_open, "open (every joint open)")?;
+    let modulus = |e: usize| {
+        if mesh.parts[e] == Part::Rock {
+            rock_e
+        } else {
+            2.5e10
+        }
+    };
+    let (pattern, k_open) = common::stiffness(mesh, &modulus, &|v| v, &fixed)?;
+    let open = common::factorised(pattern, &k_open, "open (every joint open)")?;
     let u_ref = tied_solution(mesh, rock_e, &pairs, &fixed, &f)?;
     let solve = |mut v: Vec<f64>| -> Vec<f64> {
         open.solve_in_place(&mut v)
