@@ -70,8 +70,7 @@ fn main() -> anyhow::Result<()> {
                 &elasticity::stiffness(&g, &elasticity::isotropic_d(modulus, 0.2)),
             );
         }
-        let zmin = mesh.nodes.iter().map(|p| p[2]).fold(f64::MAX, f64::min);
-        let fixed: Vec<bool> = (0..n).map(|i| mesh.nodes[i / 3][2] < zmin + 1e-6).collect();
+        let fixed = common::base_fixed(mesh);
         a.apply_dirichlet(&fixed);
         // self-weight-like load: downward on every free node
         let b: Vec<f64> = (0..n)
