@@ -35,10 +35,6 @@ use std::time::Instant;
 
 mod common;
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 /// The tied pairs of joint nodes and B, their relative displacements.
 struct Pairs {
     /// (node a, node b, joint, zone)
@@ -112,12 +108,12 @@ impl Pairs {
                             }
                         })
                         .collect();
-                    let norm0 = dot(&v, &v).sqrt();
+                    let norm0 = common::dot(&v, &v).sqrt();
                     for q in &basis {
-                        let s = dot(&v, q);
+                        let s = common::dot(&v, q);
                         v.iter_mut().zip(q).for_each(|(x, y)| *x -= s * y);
                     }
-                    let norm = dot(&v, &v).sqrt();
+                    let norm = common::dot(&v, &v).sqrt();
                     if norm > 1e-6 * norm0 {
                         v.iter_mut().for_each(|x| *x /= norm);
                         basis.push(v);
@@ -170,7 +166,8 @@ impl Deflation {
                 e[(i, j)] = wi.iter().map(|&(r, v)| v * fw[(r, j)]).sum::<f64>();
             }
         }
-        let e = nalgebra::Cholesky::new(e.symmetrize_lower())
+        // Wᵀ F W is symmetric to round-off; the Cholesky reads its lower half
+        let e = nalgebra::Cholesky::new(e)
             .ok_or_else(|| anyhow::anyhow!("Wᵀ F W is not positive definite"))?;
         Ok(Deflation { w, fw, e })
     }
@@ -196,24 +193,6 @@ impl Deflation {
     }
 }
 
-trait Symmetrize {
-    fn symmetrize_lower(self) -> Self;
-}
-
-impl Symmetrize for DMatrix<f64> {
-    fn symmetrize_lower(mut self) -> Self {
-        let n = self.nrows();
-        for i in 0..n {
-            for j in 0..i {
-                let v = 0.5 * (self[(i, j)] + self[(j, i)]);
-                self[(i, j)] = v;
-                self[(j, i)] = v;
-            }
-        }
-        self
-    }
-}
-
 /// Preconditioned (and optionally deflated) conjugate gradients on F λ = d
 /// to a relative residual of 1e-10: λ, the iterations and the residual
 /// every 25 of them.
@@ -225,7 +204,7 @@ fn cg(
     max_iterations: usize,
 ) -> (Vec<f64>, usize, Vec<String>) {
     let m = d.len();
-    let nd = dot(d, d).sqrt();
+    let nd = common::dot(d, d).sqrt();
     let mut lam = vec![0.0; m];
     let mut r = d.to_vec();
     if let Some(df) = deflation {
@@ -244,17 +223,17 @@ fn cg(
     };
     let mut z = apply_m(&r);
     let mut p = deflate(&z);
-    let mut rz = dot(&r, &z);
+    let mut rz = common::dot(&r, &z);
     let (mut it, mut hist) = (0, Vec::new());
     while it < max_iterations {
         let q = apply_f(&p);
-        let alpha = rz / dot(&p, &q);
+        let alpha = rz / common::dot(&p, &q);
         for i in 0..m {
             lam[i] += alpha * p[i];
             r[i] -= alpha * q[i];
         }
         it += 1;
-        let rel = dot(&r, &r).sqrt() / nd;
+        let rel = common::dot(&r, &r).sqrt() / nd;
         if it % 25 == 0 {
             hist.push(format!("{it}:{rel:.1e}"));
         }
@@ -262,7 +241,7 @@ fn cg(
             break;
         }
         z = apply_m(&r);
-        let rz1 = dot(&r, &z);
+        let rz1 = common::dot(&r, &z);
         let beta = rz1 / rz;
         rz = rz1;
         let zd = deflate(&z);
@@ -363,7 +342,7 @@ fn main() -> anyhow::Result<()> {
             .for_each(|(x, y)| *x -= y);
         let u = solve(rhs);
         let diff: Vec<f64> = u.iter().zip(&u_ref).map(|(a, b)| a - b).collect();
-        let err = (dot(&diff, &diff) / dot(&u_ref, &u_ref)).sqrt();
+        let err = (common::dot(&diff, &diff) / common::dot(&u_ref, &u_ref)).sqrt();
         println!(
             "dual CG, {name}: {it} iterations, {:.1} s; u against the tied solve {err:.1e}\n  {}",
             t.elapsed().as_secs_f64(),

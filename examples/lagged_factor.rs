@@ -26,10 +26,6 @@ use std::time::Instant;
 
 mod common;
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 fn main() -> anyhow::Result<()> {
     let (path, inputs, rock_e) = common::scene_from_args()?;
     let mesh = &inputs.mesh;
@@ -113,27 +109,27 @@ fn pcg(
     b: &[f64],
 ) -> anyhow::Result<usize> {
     let n = b.len();
-    let nb = dot(b, b).sqrt();
+    let nb = common::dot(b, b).sqrt();
     let mut x = vec![0.0; n];
     let mut r = b.to_vec();
     let mut z = r.clone();
     m.solve_in_place(&mut z)?;
     let mut p = z.clone();
-    let mut rz = dot(&r, &z);
+    let mut rz = common::dot(&r, &z);
     let mut q = vec![0.0; n];
     for it in 1..=200 {
         a.mul_vec(&p, &mut q);
-        let alpha = rz / dot(&p, &q);
+        let alpha = rz / common::dot(&p, &q);
         for i in 0..n {
             x[i] += alpha * p[i];
             r[i] -= alpha * q[i];
         }
-        if dot(&r, &r).sqrt() <= 1e-10 * nb {
+        if common::dot(&r, &r).sqrt() <= 1e-10 * nb {
             return Ok(it);
         }
         z.copy_from_slice(&r);
         m.solve_in_place(&mut z)?;
-        let rz1 = dot(&r, &z);
+        let rz1 = common::dot(&r, &z);
         for i in 0..n {
             p[i] = z[i] + rz1 / rz * p[i];
         }

@@ -107,3 +107,8 @@ pub fn base_fixed(mesh: &Mesh) -> Vec<bool> {
         .map(|i| mesh.nodes[i / 3][2] < zmin + 1e-6)
         .collect()
 }
+
+/// The dot product of two vectors of one length.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
